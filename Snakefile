@@ -1,0 +1,20 @@
+# flyover: real interchanges → topology classes → covering arrays → 3D
+# interchanges → OpenDRIVE/SUMO → evaluation. See README.md and ../shared/DESIGN.md.
+from snakemake.utils import min_version
+
+min_version("9.10")
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/topology.smk"
+
+
+rule all:
+    input:
+        "results/classes.parquet",
+        "results/rejected.parquet",
+        class_topology_outputs,
+    default_target: True

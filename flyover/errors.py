@@ -1,0 +1,50 @@
+"""Exceptions raised by flyover, each carrying the file and element at fault."""
+
+from __future__ import annotations
+
+__all__ = ["FlyoverError", "TopologyError", "InputFormatError", "ConfigError"]
+
+
+class FlyoverError(Exception):
+    """Base class: a problem with a user-supplied input.
+
+    Parameters
+    ----------
+    reason
+        What rule was broken, in one line.
+    source
+        The file the problem was found in (``None`` when built in memory).
+    element
+        The node, edge or key at fault, e.g. ``"r3"`` or ``"A1->r2"``.
+    """
+
+    def __init__(self, reason: str, *, source: str | None = None, element: str | None = None):
+        self.reason = reason
+        self.source = source
+        self.element = element
+        super().__init__(self.one_line())
+
+    def one_line(self) -> str:
+        where = self.source or "<memory>"
+        if self.element:
+            where += f": {self.element}"
+        return f"{where}: {self.reason}"
+
+    def located(self, source: str) -> "FlyoverError":
+        """Return the same error attributed to ``source`` if it had none."""
+        if self.source is None:
+            self.source = source
+            self.args = (self.one_line(),)
+        return self
+
+
+class TopologyError(FlyoverError):
+    """A topology breaks a rule of the model (paper Def. 1)."""
+
+
+class InputFormatError(FlyoverError):
+    """A file cannot be read: malformed XML/YAML or an unknown schema."""
+
+
+class ConfigError(FlyoverError):
+    """The workflow configuration fails its schema."""

@@ -1,0 +1,69 @@
+"""Import a city folder: every file → native GraphML per interchange, rejections recorded.
+
+This is the library side of the workflow's per-city rule; one bad file never
+stops the others.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from pathlib import Path
+from typing import Iterable
+
+from flyover.errors import FlyoverError, TopologyError
+from flyover.topology.io import atomic_write, read_topologies, write_graphml
+
+__all__ = ["import_city", "CITY_INDEX", "read_city_index"]
+
+log = logging.getLogger(__name__)
+
+#: per-city index written beside the GraphML files
+CITY_INDEX = "index.json"
+
+
+def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.PathLike) -> dict:
+    """Read every file of ``city`` and write ``{outdir}/{interchange}.graphml``.
+
+    Also writes ``{outdir}/index.json``: the interchanges written (name,
+    source file, GraphML path) and the rejections (source file, element,
+    reason). Interchange names must be unique within a city; a later
+    duplicate is rejected.
+
+    Returns
+    -------
+    dict
+        The index that was written.
+    """
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    interchanges, rejected = [], []
+    for path in sorted(map(str, files)):
+        try:
+            topologies = read_topologies(path)
+        except FlyoverError as exc:
+            exc.located(path)
+            log.warning("rejected %s", exc.one_line())
+            rejected.append({"city": city, "source_file": path, "element": exc.element or "",
+                             "reason": exc.reason})
+            continue
+        for t in topologies:
+            if any(i["interchange"] == t.name for i in interchanges):
+                exc = TopologyError("duplicate interchange name in this city", source=path, element=t.name)
+                log.warning("rejected %s", exc.one_line())
+                rejected.append({"city": city, "source_file": path, "element": t.name, "reason": exc.reason})
+                continue
+            target = outdir / f"{t.name}.graphml"
+            write_graphml(t, target)
+            interchanges.append({"city": city, "interchange": t.name, "source_file": path,
+                                 "graphml": str(target)})
+            log.info("%s: %s", path, t.summary())
+    index = {"city": city, "interchanges": interchanges, "rejected": rejected}
+    atomic_write(outdir / CITY_INDEX, json.dumps(index, indent=2, sort_keys=True).encode())
+    return index
+
+
+def read_city_index(outdir: str | os.PathLike) -> dict:
+    """The index a previous :func:`import_city` wrote into ``outdir``."""
+    return json.loads((Path(outdir) / CITY_INDEX).read_text(encoding="utf-8"))

@@ -1,0 +1,339 @@
+"""Reading and writing topologies: native GraphML, FLYOVER dataset GraphML, YAML spec.
+
+Formats (see ``../shared/DESIGN.md`` and the README):
+
+* **native GraphML** — node ``kind`` (road|ramp), ``expressway``, ``lanes``;
+  edge ``label``, ``pos``.
+* **FLYOVER dataset GraphML** — node ``type`` (main|link), ``name``, ``lane``,
+  ``radius``, ``curv``, ``geo``, ``ctrl``; edge ``ramp`` (out|in), ``junc``
+  (right|left|middle), ``part``. The expressway is the letter of a road name.
+* **YAML spec** — the hand-writable format of city folders::
+
+      name: trumpet
+      expressways: {A: [A1, A2], B: [B1, B2]}
+      lanes: {A1: 3}
+      ramps:
+        r1: {from: A1 right, to: B2 straight}
+        r2: {from: [B1 straight], to: [r1 left]}
+
+  An endpoint is ``<node> <side> [@<pos>]`` with side ``right``, ``left`` or
+  ``straight``.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import tempfile
+from pathlib import Path
+from typing import Any, Iterable
+from xml.etree.ElementTree import ParseError
+
+import networkx as nx
+import yaml
+
+from flyover.errors import FlyoverError, InputFormatError, TopologyError
+from flyover.topology.model import Connection, Kind, Label, Ramp, Road, Topology
+
+__all__ = [
+    "TOPOLOGY_SUFFIXES",
+    "read_graphml",
+    "write_graphml",
+    "graphml_bytes",
+    "read_yaml_spec",
+    "write_yaml_spec",
+    "read_topologies",
+    "atomic_write",
+]
+
+#: file suffixes a city folder may hold, mapped to their reader's name
+TOPOLOGY_SUFFIXES = (".graphml", ".yaml", ".yml", ".osm")
+
+_SIDE_WORDS = {"right": "right", "left": "left", "straight": "middle", "middle": "middle"}
+
+
+def atomic_write(path: str | os.PathLike, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file and rename (never half-written)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _parse_label(value: Any, source: str | None, element: str) -> Label:
+    try:
+        return Label(str(value))
+    except ValueError:
+        raise TopologyError(
+            f"unknown label {value!r} (expected one of {', '.join(x.value for x in Label)})",
+            source=source, element=element) from None
+
+
+# -- GraphML ------------------------------------------------------------------
+
+def graphml_bytes(topology: Topology) -> bytes:
+    """The native GraphML of ``topology`` as bytes (deterministic)."""
+    g = nx.DiGraph(name=topology.name)
+    for n, d in sorted(topology.graph.nodes(data=True)):
+        attrs = {"kind": d["kind"].value}
+        if d["kind"] is Kind.ROAD:
+            attrs["expressway"] = d["expressway"]
+        if d.get("lanes") is not None:
+            attrs["lanes"] = int(d["lanes"])
+        g.add_node(n, **attrs)
+    for u, v, d in sorted(topology.graph.edges(data=True), key=lambda e: (e[0], e[1])):
+        attrs = {"label": d["label"].value}
+        if d.get("pos") is not None:
+            attrs["pos"] = float(d["pos"])
+        g.add_edge(u, v, **attrs)
+    buf = io.BytesIO()
+    nx.write_graphml(g, buf, encoding="utf-8", prettyprint=True)
+    return buf.getvalue()
+
+
+def write_graphml(topology: Topology, path: str | os.PathLike) -> None:
+    """Write ``topology`` as native GraphML, atomically."""
+    atomic_write(path, graphml_bytes(topology))
+
+
+def read_graphml(path: str | os.PathLike, name: str | None = None) -> Topology:
+    """Read native or FLYOVER-dataset GraphML (detected from the attributes).
+
+    Raises
+    ------
+    InputFormatError
+        The file is not GraphML or follows neither schema.
+    TopologyError
+        The topology breaks a model rule.
+    """
+    src = str(path)
+    try:
+        g = nx.read_graphml(path, force_multigraph=True)
+    except (ParseError, nx.NetworkXError, ValueError, KeyError) as exc:
+        raise InputFormatError(f"not readable as GraphML: {exc}", source=src) from None
+    name = name or g.graph.get("name") or Path(path).stem
+    node_keys = set().union(*(d.keys() for _, d in g.nodes(data=True))) if g.nodes else set()
+    if "type" in node_keys and "kind" not in node_keys:
+        return _from_flyover_graph(g, name, src)
+    return _from_native_graph(g, name, src)
+
+
+def _edges_checked(g: nx.MultiDiGraph, src: str):
+    seen = set()
+    for u, v, d in g.edges(data=True):
+        if (u, v) in seen:
+            raise TopologyError("duplicate edge", source=src, element=f"{u}->{v}")
+        seen.add((u, v))
+        yield u, v, d
+
+
+def _from_native_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
+    roads, ramps = [], []
+    for n, d in g.nodes(data=True):
+        kind = d.get("kind")
+        if kind == Kind.ROAD.value:
+            lanes = d.get("lanes")
+            roads.append(Road(n, str(d.get("expressway", "")), None if lanes is None else int(lanes)))
+        elif kind == Kind.RAMP.value:
+            ramps.append(Ramp(n))
+        else:
+            raise TopologyError(f"unknown kind {kind!r} (expected road or ramp)", source=src, element=n)
+    conns = []
+    for u, v, d in _edges_checked(g, src):
+        el = f"{u}->{v}"
+        if "label" not in d:
+            raise TopologyError("edge has no label", source=src, element=el)
+        conns.append(Connection(u, v, _parse_label(d["label"], src, el), _pos(d.get("pos"), src, el)))
+    return Topology.build(name, roads, ramps, conns, source=src)
+
+
+def _pos(value: Any, src: str | None, el: str) -> float | None:
+    if value is None or value == "":
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TopologyError(f"pos must be a number, got {value!r}", source=src, element=el) from None
+
+
+_FLYOVER_NODE_EXTRAS = ("radius", "curv", "geo", "ctrl")
+
+
+def _from_flyover_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
+    ids = {n: str(d.get("name") or n) for n, d in g.nodes(data=True)}
+    if len(set(ids.values())) != len(ids):
+        dup = sorted(v for v in ids.values() if list(ids.values()).count(v) > 1)[0]
+        raise TopologyError("duplicate node name", source=src, element=dup)
+    roads, ramps, extras = [], [], {}
+    for n, d in g.nodes(data=True):
+        nid, typ = ids[n], d.get("type")
+        extras[nid] = {k: d[k] for k in _FLYOVER_NODE_EXTRAS if k in d}
+        lanes = d.get("lane")
+        if typ == "main":
+            m = re.match(r"[A-Za-z]+", nid)
+            if not m:
+                raise TopologyError("road name must start with its expressway letter", source=src, element=nid)
+            roads.append(Road(nid, m.group(0), None if lanes in (None, "") else int(lanes)))
+        elif typ == "link":
+            if lanes not in (None, ""):
+                extras[nid]["lanes"] = int(lanes)
+            ramps.append(Ramp(nid))
+        else:
+            raise TopologyError(f"unknown node type {typ!r} (expected main or link)", source=src, element=nid)
+    conns = []
+    for u, v, d in _edges_checked(g, src):
+        el = f"{ids[u]}->{ids[v]}"
+        ramp, junc = d.get("ramp"), d.get("junc")
+        if ramp not in ("out", "in"):
+            raise TopologyError(f"unknown ramp {ramp!r} (expected out or in)", source=src, element=el)
+        if junc not in ("right", "left", "middle"):
+            raise TopologyError(f"unknown junc {junc!r} (expected right, left or middle)",
+                                source=src, element=el)
+        conns.append(Connection(ids[u], ids[v], Label.of(ramp == "out", junc),
+                                _pos(d.get("part"), src, el)))
+    return Topology.build(name, roads, ramps, conns, source=src, node_attrs=extras,
+                          attrs={"format": "flyover-graphml"})
+
+
+# -- YAML spec ----------------------------------------------------------------
+
+_ENDPOINT = re.compile(r"^\s*(?P<node>\S+)\s+(?P<side>\w+)\s*(?:@\s*(?P<pos>\S+))?\s*$")
+
+
+def read_yaml_spec(path: str | os.PathLike) -> Topology:
+    """Read a YAML spec (format in the module docstring and the README)."""
+    src = str(path)
+    try:
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        line = getattr(getattr(exc, "problem_mark", None), "line", None)
+        where = f" (line {line + 1})" if line is not None else ""
+        raise InputFormatError(f"malformed YAML{where}: {str(exc).splitlines()[0]}", source=src) from None
+    return topology_from_spec(doc, src, default_name=Path(path).stem)
+
+
+def topology_from_spec(doc: Any, src: str | None, default_name: str = "interchange") -> Topology:
+    """Build a topology from a parsed YAML spec mapping."""
+    if not isinstance(doc, dict):
+        raise InputFormatError("a YAML spec must be a mapping", source=src)
+    unknown = set(doc) - {"name", "expressways", "lanes", "ramps", "design", "source"}
+    if unknown:
+        raise InputFormatError(f"unknown key(s): {', '.join(sorted(map(str, unknown)))}", source=src,
+                               element=sorted(map(str, unknown))[0])
+    exps = doc.get("expressways")
+    if not isinstance(exps, dict) or not exps:
+        raise InputFormatError("'expressways' must map names to lists of carriageways", source=src,
+                               element="expressways")
+    lanes = doc.get("lanes") or {}
+    if not isinstance(lanes, dict):
+        raise InputFormatError("'lanes' must map carriageways to integers", source=src, element="lanes")
+    roads = []
+    for exp, cws in exps.items():
+        if not isinstance(cws, list) or not all(isinstance(c, str) for c in cws):
+            raise InputFormatError("carriageways must be a list of names", source=src,
+                                   element=f"expressways.{exp}")
+        roads += [Road(c, str(exp), lanes.get(c)) for c in cws]
+    road_ids = {r.id for r in roads}
+    for c in lanes:
+        if c not in road_ids:
+            raise TopologyError("lanes given for an unknown carriageway", source=src, element=f"lanes.{c}")
+    ramps_doc = doc.get("ramps")
+    if not isinstance(ramps_doc, dict) or not ramps_doc:
+        raise InputFormatError("'ramps' must map ramp names to {from:, to:}", source=src, element="ramps")
+    ramps, conns = [], []
+    for rid, ends in ramps_doc.items():
+        rid = str(rid)
+        ramps.append(Ramp(rid))
+        if not isinstance(ends, dict) or set(ends) - {"from", "to"}:
+            raise InputFormatError("a ramp is {from: ..., to: ...}", source=src, element=f"ramps.{rid}")
+        for key, is_out in (("from", True), ("to", False)):
+            items = ends.get(key) or []
+            for item in [items] if isinstance(items, str) else items:
+                el = f"ramps.{rid}.{key}"
+                m = _ENDPOINT.match(str(item))
+                if not m or m["side"] not in _SIDE_WORDS:
+                    raise InputFormatError(f"endpoint {item!r} is not '<node> right|left|straight [@pos]'",
+                                           source=src, element=el)
+                other, side = m["node"], _SIDE_WORDS[m["side"]]
+                label = Label.of(is_out, side)
+                edge = (other, rid) if is_out else (rid, other)
+                conns.append(Connection(*edge, label, _pos(m["pos"], src, el)))
+    return Topology.build(str(doc.get("name") or default_name), roads, ramps, conns, source=src,
+                          attrs={k: doc[k] for k in ("design", "source") if k in doc})
+
+
+def spec_dict(topology: Topology) -> dict[str, Any]:
+    """The YAML-spec mapping of ``topology`` (inverse of :func:`topology_from_spec`)."""
+    g = topology.graph
+    word = {"right": "right", "left": "left", "middle": "straight"}
+    ramps: dict[str, dict[str, list[str]]] = {r: {"from": [], "to": []} for r in topology.ramps}
+    for c in topology.connections():
+        at = "" if c.pos is None else f" @{c.pos:g}"
+        if c.label.is_out:
+            ramps[c.target]["from"].append(f"{c.source} {word[c.label.side]}{at}")
+        else:
+            ramps[c.source]["to"].append(f"{c.target} {word[c.label.side]}{at}")
+    doc: dict[str, Any] = {"name": topology.name,
+                           "expressways": {k: list(v) for k, v in topology.expressways.items()}}
+    lanes = {r: g.nodes[r]["lanes"] for r in topology.roads if g.nodes[r].get("lanes") is not None}
+    if lanes:
+        doc["lanes"] = lanes
+    doc["ramps"] = ramps
+    return doc
+
+
+def write_yaml_spec(topology: Topology, path: str | os.PathLike) -> None:
+    """Write ``topology`` as a YAML spec, atomically."""
+    text = yaml.safe_dump(spec_dict(topology), sort_keys=False, default_flow_style=None)
+    atomic_write(path, text.encode("utf-8"))
+
+
+# -- any format ---------------------------------------------------------------
+
+def read_topologies(path: str | os.PathLike) -> list[Topology]:
+    """Read every interchange in ``path``, whatever its format (by suffix).
+
+    GraphML and YAML files hold one interchange; an OpenStreetMap extract
+    (``.osm``) may hold several (needs :mod:`flyover.osm`).
+    """
+    p = Path(path)
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".graphml":
+            return [read_graphml(p)]
+        if suffix in (".yaml", ".yml"):
+            return [read_yaml_spec(p)]
+        if suffix == ".osm":
+            try:
+                from flyover.osm import read_osm_topologies  # noqa: PLC0415 (optional stage)
+            except ImportError:
+                raise InputFormatError("OpenStreetMap import is not available in this build",
+                                       source=str(p)) from None
+            return read_osm_topologies(p)
+    except OSError as exc:
+        raise InputFormatError(f"cannot read: {exc.strerror}", source=str(p)) from None
+    raise InputFormatError(f"unknown file type {suffix!r} (expected one of {', '.join(TOPOLOGY_SUFFIXES)})",
+                           source=str(p))
+
+
+def iter_files(paths: Iterable[str | os.PathLike]) -> list[Path]:
+    """Expand folders into the topology files they hold (sorted)."""
+    out: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            out += sorted(f for f in p.iterdir() if f.suffix.lower() in TOPOLOGY_SUFFIXES)
+        else:
+            out.append(p)
+    return out
+
+
+def located(exc: FlyoverError, path: str | os.PathLike) -> FlyoverError:
+    """Attach ``path`` to an error that has no source yet."""
+    return exc.located(str(path))

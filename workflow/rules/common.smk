@@ -1,0 +1,62 @@
+# Shared helpers: config validation, city discovery, input functions,
+# wildcard constraints. No rule lives here.
+import json
+from pathlib import Path
+
+from flyover.config import validate_config
+from flyover.topology.io import TOPOLOGY_SUFFIXES
+
+
+validate_config(config, "config/config.yaml")
+
+# Bump a stage's version when its algorithm changes: params are rerun triggers.
+TOPOLOGY_VERSION = 1
+
+
+wildcard_constraints:
+    city=r"[A-Za-z0-9_.-]+",
+    class_id=r"c[0-9a-f]{10}",
+
+
+def city_names():
+    """Cities to build: config `cities`, else every folder of cities_dir."""
+    if config["cities"]:
+        return sorted(config["cities"])
+    root = Path(config["cities_dir"])
+    return sorted(p.name for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+
+
+CITIES = city_names()
+
+
+def city_files(wildcards):
+    """The topology files of one city (GraphML, YAML specs, OSM extracts)."""
+    root = Path(config["cities_dir"]) / wildcards.city
+    return sorted(
+        str(p)
+        for p in root.iterdir()
+        if p.is_file() and p.suffix.lower() in TOPOLOGY_SUFFIXES
+    )
+
+
+def class_manifest():
+    """The classify checkpoint's manifest (class id → representative etc.)."""
+    path = checkpoints.classify.get().output.manifest
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def class_ids():
+    return sorted(class_manifest()["classes"])
+
+
+def class_representative(wildcards):
+    """The GraphML of the first member of a class (by city, file, name)."""
+    return class_manifest()["classes"][wildcards.class_id]["representative"]
+
+
+def class_topology_outputs(wildcards):
+    return expand(
+        "results/classes/{class_id}/topology.{ext}",
+        class_id=class_ids(),
+        ext=["graphml", "png"],
+    )

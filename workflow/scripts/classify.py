@@ -1,0 +1,26 @@
+"""Checkpoint classify: all city indexes → classes.parquet, rejected.parquet, manifest."""
+import logging
+
+from flyover.topology.city import read_city_index
+from flyover.topology.tables import (
+    CLASSES_SCHEMA,
+    REJECTED_SCHEMA,
+    classify_cities,
+    write_manifest,
+    write_parquet,
+)
+from flyover.workflow_log import setup_logging
+
+setup_logging(snakemake.log[0])
+indexes = [read_city_index(d) for d in snakemake.input]
+rows, rejected, manifest = classify_cities(
+    indexes, catalog_names=snakemake.params.catalog_names
+)
+write_parquet(rows, CLASSES_SCHEMA, snakemake.output.table)
+write_parquet(rejected, REJECTED_SCHEMA, snakemake.output.rejected)
+write_manifest(manifest, snakemake.output.manifest)
+log = logging.getLogger("classify")
+for r in rejected:
+    log.warning("rejected %s: %s: %s", r["source_file"], r["element"], r["reason"])
+log.info("%d interchanges in %d classes, %d rejected",
+         len(rows), len(manifest["classes"]), len(rejected))
