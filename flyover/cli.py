@@ -35,8 +35,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in STAGE_CLIS:
-        if importlib.util.find_spec(name.rpartition(".")[0]) is None:
-            continue  # stage not built in this checkout
+        if importlib.util.find_spec(name.rpartition(".")[0]) is None or \
+                importlib.util.find_spec(name) is None:
+            continue  # stage (or its commands) not built in this checkout
         importlib.import_module(name).register(sub)
     return parser
 
