@@ -9,6 +9,8 @@ rule import_city:
         directory("results/topology/{city}"),
     log:
         "logs/topology/{city}.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=TOPOLOGY_VERSION,
         city="{city}",
@@ -26,6 +28,8 @@ checkpoint classify:
         manifest="results/classes/manifest.json",
     log:
         "logs/classify.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=TOPOLOGY_VERSION,
         catalog_names=config["topology"]["catalog_names"],
@@ -44,7 +48,17 @@ rule class_topology:
         png="results/classes/{class_id}/topology.png",
     log:
         "logs/classes/{class_id}.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=TOPOLOGY_VERSION,
     script:
         "../scripts/class_topology.py"
+
+
+rule topology:
+    """Target: the topology stage only (classes, rejections, class drawings)."""
+    input:
+        "results/classes.parquet",
+        "results/rejected.parquet",
+        class_topology_outputs,

@@ -21,6 +21,7 @@ write_parquet(rejected, REJECTED_SCHEMA, snakemake.output.rejected)
 write_manifest(manifest, snakemake.output.manifest)
 log = logging.getLogger("classify")
 for r in rejected:
-    log.warning("rejected %s: %s: %s", r["source_file"], r["element"], r["reason"])
+    where = ": ".join(x for x in (r["source_file"], r["element"]) if x)
+    log.warning("rejected %s: %s", where, r["reason"])
 log.info("%d interchanges in %d classes, %d rejected",
          len(rows), len(manifest["classes"]), len(rejected))
