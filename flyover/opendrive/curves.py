@@ -1,0 +1,148 @@
+"""Plan-view curves of the export: straight lines and chains of cubic Béziers.
+
+A cubic Bézier is exactly an OpenDRIVE ``paramPoly3`` with
+``pRange="normalized"`` (:func:`bezier_to_parampoly3`); chains are cut at
+arc-length positions by de Casteljau subdivision, which is exact.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["ParamPoly3", "Line", "BezierChain", "bezier_to_parampoly3", "split_bezier",
+           "bezier_length"]
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(32)
+
+
+def _deriv(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    t = np.asarray(t, dtype=float)[:, None]
+    return 3 * ((1 - t) ** 2 * (p[1] - p[0]) + 2 * (1 - t) * t * (p[2] - p[1]) + t ** 2 * (p[3] - p[2]))
+
+
+def _point(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    t = np.asarray(t, dtype=float)[:, None]
+    return (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t ** 2 * p[2] + t ** 3 * p[3]
+
+
+def bezier_length(p: np.ndarray, t0: float = 0.0, t1: float = 1.0, parts: int = 8) -> float:
+    """Arc length of a cubic Bézier between parameters ``t0`` and ``t1`` (composite Gauss–Legendre)."""
+    edges = np.linspace(t0, t1, parts + 1)
+    total = 0.0
+    for a, b in zip(edges, edges[1:]):
+        t = 0.5 * (b - a) * _GL_X + 0.5 * (a + b)
+        total += 0.5 * (b - a) * float(np.sum(_GL_W * np.linalg.norm(_deriv(p, t), axis=1)))
+    return total
+
+
+def split_bezier(p: np.ndarray, t0: float, t1: float) -> np.ndarray:
+    """The control points of the part ``[t0, t1]`` of a cubic Bézier (exact)."""
+    def left(q, t):
+        a = q[:-1] * (1 - t) + q[1:] * t
+        b = a[:-1] * (1 - t) + a[1:] * t
+        c = b[:-1] * (1 - t) + b[1:] * t
+        return np.array([q[0], a[0], b[0], c[0]]), np.array([c[0], b[1], a[2], q[3]])
+    q = np.asarray(p, dtype=float)
+    if t1 < 1.0:
+        q = left(q, t1)[0]
+    if t0 > 0.0:
+        q = left(q, t0 / t1)[1]
+    return q
+
+
+@dataclass(frozen=True)
+class ParamPoly3:
+    """An OpenDRIVE ``<paramPoly3 pRange="normalized">`` record."""
+
+    x: float
+    y: float
+    hdg: float
+    length: float
+    u: tuple[float, float, float, float]
+    v: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Line:
+    """An OpenDRIVE ``<line>`` record."""
+
+    x: float
+    y: float
+    hdg: float
+    length: float
+
+
+def bezier_to_parampoly3(p: np.ndarray) -> ParamPoly3:
+    """The exact ``paramPoly3`` (normalized) of a cubic Bézier.
+
+    >>> pp = bezier_to_parampoly3(np.array([[0, 0], [1, 0], [2, 0], [3, 0.]]))
+    >>> round(pp.length, 9), pp.u, pp.v
+    (3.0, (0.0, 3.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))
+    """
+    p = np.asarray(p, dtype=float)
+    b = 3 * (p[1] - p[0])
+    c = 3 * (p[0] - 2 * p[1] + p[2])
+    d = -p[0] + 3 * p[1] - 3 * p[2] + p[3]
+    tan = b if np.linalg.norm(b) > 1e-9 else (p[3] - p[0])
+    hdg = math.atan2(tan[1], tan[0])
+    cs, sn = math.cos(hdg), math.sin(hdg)
+    rot = lambda q: (cs * q[0] + sn * q[1], -sn * q[0] + cs * q[1])  # noqa: E731
+    (bu, bv), (cu, cv), (du, dv) = rot(b), rot(c), rot(d)
+    f = float
+    return ParamPoly3(f(p[0][0]), f(p[0][1]), hdg, f(bezier_length(p)),
+                      (0.0, f(bu), f(cu), f(du)), (0.0, 0.0 if abs(bv) < 1e-9 else f(bv), f(cv), f(dv)))
+
+
+class BezierChain:
+    """A G1 chain of cubic Bézier pieces with arc-length access."""
+
+    def __init__(self, pieces: list[np.ndarray]):
+        self.pieces = [np.asarray(p, dtype=float) for p in pieces]
+        self.lengths = np.array([bezier_length(p) for p in self.pieces])
+        self.starts = np.concatenate([[0.0], np.cumsum(self.lengths)])
+        self.length = float(self.starts[-1])
+
+    def locate(self, s: float) -> tuple[int, float]:
+        """(piece index, Bézier parameter) of arc length ``s``."""
+        s = min(max(s, 0.0), self.length)
+        i = int(np.clip(np.searchsorted(self.starts, s, side="right") - 1, 0, len(self.pieces) - 1))
+        p, target = self.pieces[i], s - self.starts[i]
+        if target <= 1e-9:
+            return i, 0.0
+        if target >= self.lengths[i] - 1e-9:
+            return i, 1.0
+        t = target / self.lengths[i]
+        for _ in range(30):
+            err = bezier_length(p, 0.0, t) - target
+            t = float(np.clip(t - err / np.linalg.norm(_deriv(p, np.array([t]))[0]), 0.0, 1.0))
+            if abs(err) < 1e-10:
+                break
+        return i, t
+
+    def pose(self, s: float) -> tuple[float, float, float]:
+        """(x, y, heading) at arc length ``s``."""
+        i, t = self.locate(s)
+        xy = _point(self.pieces[i], np.array([t]))[0]
+        d = _deriv(self.pieces[i], np.array([t]))[0]
+        return float(xy[0]), float(xy[1]), math.atan2(d[1], d[0])
+
+    def part(self, s0: float, s1: float) -> list[ParamPoly3]:
+        """``paramPoly3`` records of the chain between arc lengths ``s0`` and ``s1``."""
+        (i0, t0), (i1, t1) = self.locate(s0), self.locate(s1)
+        if t0 >= 1.0 - 1e-12 and i0 < len(self.pieces) - 1:
+            i0, t0 = i0 + 1, 0.0
+        if t1 <= 1e-12 and i1 > 0:
+            i1, t1 = i1 - 1, 1.0
+        out = []
+        for i in range(i0, i1 + 1):
+            a = t0 if i == i0 else 0.0
+            b = t1 if i == i1 else 1.0
+            if b - a <= 1e-12:
+                continue
+            q = split_bezier(self.pieces[i], a, b)
+            if bezier_length(q) > 1e-6:
+                out.append(bezier_to_parampoly3(q))
+        return out

@@ -1,0 +1,584 @@
+"""Write an interchange (``geometry.json``) as OpenDRIVE 1.7.
+
+Model
+-----
+* Every road (straight carriageway) and ramp (Bézier chain) is cut into
+  OpenDRIVE roads at its attachments; each OpenDRIVE road's ``name`` is the
+  topology element it belongs to (``A1``, ``r3``).
+* A diverge (``Out-R``/``Out-L`` inside the parent) is a junction: the parent
+  road ends, the junction holds two connecting roads (the parent's next
+  ``Lc`` metres and the ramp's first ``Lc`` metres), then parent and ramp go
+  on as ordinary roads. Before the diverge the parent carries the ramp's
+  lanes as auxiliary lanes that open from zero width (a deceleration lane),
+  on the side of the exit (left ones through ``laneOffset``). A merge
+  (``In-R``/``In-L``) is the mirror image with an acceleration lane that
+  closes to zero width after the junction.
+* ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
+  a direct road link; lane counts and widths change smoothly on the ramp.
+* Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
+  pRange="normalized">`` (exact), heights ``<elevation>`` cubics of s (exact
+  re-basing of the geometry's profile), every lane followed by a shoulder.
+
+The local frame is the geometry stage's: metres, x east, y north, z up,
+origin at the interchange centre, headings counter-clockwise from +x,
+right-hand traffic; it is written into the header as ``userData``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+from lxml import etree
+
+from flyover.errors import FlyoverError
+from flyover.geometry.model import InterchangeGeometry
+from flyover.opendrive.curves import BezierChain, Line, ParamPoly3
+from flyover.opendrive.reader import Cubic
+
+__all__ = ["ExportError", "ExportOptions", "xodr_bytes", "write_xodr", "FRAME_NOTE"]
+
+log = logging.getLogger(__name__)
+
+FRAME_NOTE = ("local Cartesian frame in metres: x east, y north, z up, origin at the "
+              "interchange centre; headings in radians counter-clockwise from +x; "
+              "right-hand traffic; no geographic reference")
+
+
+class ExportError(FlyoverError):
+    """The geometry cannot be written as OpenDRIVE."""
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """Tunables of the export.
+
+    Attributes
+    ----------
+    connecting_length_m
+        Length of the parent's and the ramp's pieces inside a diverge/merge junction.
+    taper_length_m
+        Length over which an auxiliary lane opens/closes, or lane widths change.
+    snap_tol_m
+        Largest correction of a ramp end onto its attachment before failing.
+    """
+
+    connecting_length_m: float = 15.0
+    taper_length_m: float = 80.0
+    snap_tol_m: float = 0.5
+
+
+# -- elements ---------------------------------------------------------------------------
+
+@dataclass
+class _Element:
+    id: str
+    kind: str  # road | ramp
+    lanes: int
+    width: float
+    length: float
+    z0: float = 0.0
+    line: tuple[float, float, float] | None = None  # x, y, hdg for roads
+    chain: BezierChain | None = None
+    elevation: tuple[Cubic, ...] = ()
+
+    def pose(self, s: float) -> tuple[float, float, float]:
+        if self.chain is not None:
+            return self.chain.pose(s)
+        x, y, h = self.line
+        return x + s * math.cos(h), y + s * math.sin(h), h
+
+    def z(self, s: float) -> float:
+        if not self.elevation:
+            return self.z0
+        rec = [e for e in self.elevation if e.s <= s + 1e-9][-1] if s > self.elevation[0].s else self.elevation[0]
+        return float(rec(s))
+
+    def plan(self, s0: float, s1: float) -> list[Line | ParamPoly3]:
+        if self.chain is not None:
+            return self.chain.part(s0, s1)
+        x, y, h = self.pose(s0)
+        return [Line(x, y, h, s1 - s0)]
+
+    def elevation_part(self, s0: float, s1: float) -> list[Cubic]:
+        if not self.elevation:
+            return [Cubic(0.0, self.z0, 0.0, 0.0, 0.0)]
+        out = []
+        recs = list(self.elevation)
+        for i, r in enumerate(recs):
+            end = recs[i + 1].s if i + 1 < len(recs) else math.inf
+            if end <= s0 + 1e-9 and i + 1 < len(recs):
+                continue
+            if r.s >= s1 - 1e-9 and out:
+                break
+            start = max(r.s, s0)
+            dl = start - r.s
+            out.append(Cubic(start - s0, r.a + r.b * dl + r.c * dl ** 2 + r.d * dl ** 3,
+                             r.b + 2 * r.c * dl + 3 * r.d * dl ** 2, r.c + 3 * r.d * dl, r.d))
+        return out
+
+
+@dataclass(frozen=True)
+class _Event:
+    """A ramp attaching to a parent element at ``s``."""
+
+    parent: str
+    ramp: str
+    s: float
+    out: bool  # diverge (ramp leaves) or merge (ramp joins)
+    side: str  # R | L | M
+
+
+@dataclass
+class _Piece:
+    element: str
+    s0: float
+    s1: float
+    junction: int | None = None  # junction id when a connecting road
+    road_id: int = 0
+    start_region: tuple | None = None  # ("aux", side, k, w) | ("trans", n_from, w_from)
+    end_region: tuple | None = None
+    pred: tuple | None = None  # ("road", id, contact) | ("junction", id)
+    succ: tuple | None = None
+
+
+@dataclass
+class _Junction:
+    id: int
+    event: _Event
+    pieces: dict[str, _Piece] = field(default_factory=dict)  # "parent"/"ramp" -> piece
+
+
+def _rising(w: float, T: float) -> Cubic:
+    return Cubic(0.0, 0.0, 0.0, 3 * w / T ** 2, -2 * w / T ** 3)
+
+
+def _change(w0: float, w1: float, T: float) -> Cubic:
+    return Cubic(0.0, w0, 0.0, 3 * (w1 - w0) / T ** 2, -2 * (w1 - w0) / T ** 3)
+
+
+def _const(w: float) -> Cubic:
+    return Cubic(0.0, w, 0.0, 0.0, 0.0)
+
+
+def _elements(g: InterchangeGeometry, opts: ExportOptions) -> dict[str, _Element]:
+    els: dict[str, _Element] = {}
+    for r in g.roads:
+        els[r.id] = _Element(r.id, "road", r.lanes, g.lane_width_m, r.length_m, z0=r.z_m,
+                             line=(r.start[0], r.start[1], r.heading_rad))
+    for r in g.ramps:
+        pieces = [np.array(p.p, dtype=float) for p in r.plan]
+        els[r.id] = _Element(r.id, "ramp", r.lanes, g.ramp_lane_width_m, 0.0,
+                             chain=BezierChain(pieces),
+                             elevation=tuple(Cubic(e.s_m, e.a, e.b, e.c, e.d) for e in r.elevation))
+    return els
+
+
+def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOptions) -> None:
+    """Move each ramp's end control points exactly onto its attachment (by ≤ snap_tol_m)."""
+    for r in g.ramps:
+        el = els[r.id]
+        pieces = [p.copy() for p in el.chain.pieces]
+        for att, at_start in ((r.start, True), (r.end, False)):
+            par = els.get(att.parent)
+            if par is None:
+                raise ExportError(f"attaches to unknown parent {att.parent!r}", element=r.id)
+            side = att.label[-1]
+            x, y, h = par.pose(att.s_m)
+            if side == "M":
+                off = 0.0
+            elif side == "R":
+                off = -par.lanes * par.width
+            else:
+                off = el.lanes * el.width
+            px, py = x - math.sin(h) * off, y + math.cos(h) * off
+            q = pieces[0] if at_start else pieces[-1]
+            i0, i1 = (0, 1) if at_start else (3, 2)
+            d = math.hypot(q[i0][0] - px, q[i0][1] - py)
+            if d > opts.snap_tol_m:
+                raise ExportError(f"{'start' if at_start else 'end'} is {d:.3f} m from its "
+                                  f"attachment on {att.parent} at s={att.s_m:.2f}", element=r.id)
+            arm = float(np.linalg.norm(q[i1] - q[i0]))
+            sgn = 1.0 if at_start else -1.0
+            q[i0] = (px, py)
+            q[i1] = (px + sgn * arm * math.cos(h), py + sgn * arm * math.sin(h))
+        el.chain = BezierChain(pieces)
+        el.length = el.chain.length
+        # the elevation profile covers 0..length_m of the geometry stage; re-check the ends
+        for s, att in ((0.0, r.start), (el.length, r.end)):
+            dz = abs(el.z(s) - els[att.parent].z(att.s_m))
+            if dz > 0.01:
+                log.warning("%s: ramp height %.3f m off its attachment on %s", r.id, dz, att.parent)
+
+
+def _events(g: InterchangeGeometry) -> list[_Event]:
+    ev = []
+    for r in g.ramps:
+        ev.append(_Event(r.start.parent, r.id, r.start.s_m, True, r.start.label[-1]))
+        ev.append(_Event(r.end.parent, r.id, r.end.s_m, False, r.end.label[-1]))
+    return ev
+
+
+def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOptions
+                 ) -> tuple[dict[str, list[_Piece]], list[_Junction]]:
+    events = _events(g)
+    junctions: list[_Junction] = []
+    cuts: dict[str, list[tuple[float, float, _Junction, str]]] = {k: [] for k in els}
+    for e in sorted(events, key=lambda e: (e.parent, e.s, e.ramp)):
+        if e.side == "M":
+            continue
+        par, ramp = els[e.parent], els[e.ramp]
+        same = sorted(x.s for x in events if x.parent == e.parent and x.side != "M")
+        gaps = [abs(x - e.s) for x in same if abs(x - e.s) > 1e-9]
+        gaps += [e.s, par.length - e.s] if True else []
+        other = [x.s for x in events if x.parent == e.ramp and x.side != "M"]
+        ramp_s = 0.0 if e.out else ramp.length
+        gaps += [abs(x - ramp_s) for x in other] + [ramp.length / 2]
+        lc = min([opts.connecting_length_m] + [gp / 3 for gp in gaps])
+        if lc < 0.5:
+            raise ExportError(f"attachment at s={e.s:.2f} of {e.parent} leaves no room "
+                              f"for a junction ({lc:.2f} m)", element=e.ramp)
+        j = _Junction(1000 + len(junctions), e)
+        junctions.append(j)
+        if e.out:
+            cuts[e.parent].append((e.s, e.s + lc, j, "parent"))
+            cuts[e.ramp].append((0.0, lc, j, "ramp"))
+        else:
+            cuts[e.parent].append((e.s - lc, e.s, j, "parent"))
+            cuts[e.ramp].append((ramp.length - lc, ramp.length, j, "ramp"))
+    pieces: dict[str, list[_Piece]] = {}
+    for k, el in els.items():
+        out, s = [], 0.0
+        for a, b, j, role in sorted(cuts[k], key=lambda c: c[0]):
+            if a > s + 1e-6:
+                out.append(_Piece(k, s, a))
+            elif a < s - 1e-6:
+                raise ExportError(f"junctions overlap at s={a:.2f}", element=k)
+            p = _Piece(k, a, b, junction=j.id)
+            j.pieces[role] = p
+            out.append(p)
+            s = b
+        if s < el.length - 1e-6:
+            out.append(_Piece(k, s, el.length))
+        pieces[k] = out
+    return pieces, junctions
+
+
+def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float):
+    """Lane sections of a normal piece: list of (s, laneOffset cubic, [(key, width cubic)])."""
+    L = piece.s1 - piece.s0
+    base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
+    secs = []
+    r0, r1 = piece.start_region, piece.end_region
+    s_plain0, s_plain1 = (T0 if r0 else 0.0), (L - T1 if r1 else L)
+    if r0:
+        secs.append((0.0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
+    if s_plain1 - s_plain0 > 1e-6 or not (r0 or r1):
+        secs.append((s_plain0, (_const(0.0), base + [(("sh",), _const(sh))])))
+    if r1:
+        secs.append((L - T1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
+    return secs
+
+
+def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: float):
+    kind = region[0]
+    if kind == "aux":
+        _, side, k, w = region
+        cub = _rising(w, T) if opening else _change(w, 0.0, T)
+        aux = [(("aux", j), cub) for j in range(1, k + 1)]
+        base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
+        if side == "R":
+            return _const(0.0), base + aux + [(("sh",), _const(sh))]
+        off = Cubic(0.0, cub.a * k, cub.b * k, cub.c * k, cub.d * k)
+        return off, aux + base + [(("sh",), _const(sh))]
+    # width transition toward/from a carriageway of n lanes of width w (Out-M / In-M)
+    _, n, w = region
+    lanes = []
+    for i in range(1, max(n, el.lanes) + 1):
+        mine = el.width if i <= el.lanes else 0.0
+        theirs = w if i <= n else 0.0
+        cub = _change(mine, theirs, T) if opening else _change(theirs, mine, T)
+        lanes.append((("b", i) if i <= el.lanes else ("x", i), cub))
+    return _const(0.0), lanes + [(("sh",), _const(sh))]
+
+
+def _f(x: float) -> str:
+    x = float(x)
+    if abs(x) < 5e-13:
+        x = 0.0
+    return repr(round(x, 12))
+
+
+def _cubic_attrs(c: Cubic, s_name: str = "s") -> dict[str, str]:
+    return {s_name: _f(c.s), "a": _f(c.a), "b": _f(c.b), "c": _f(c.c), "d": _f(c.d)}
+
+
+def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
+               name: str | None = None) -> bytes:
+    """The OpenDRIVE 1.7 document of an interchange (byte-reproducible)."""
+    opts = options or ExportOptions()
+    els = _elements(g, opts)
+    _snap_ramps(g, els, opts)
+    pieces, junctions = _plan_pieces(g, els, opts)
+    sh = g.shoulder_width_m
+    # ids
+    rid = 1
+    for k in sorted(els, key=lambda k: (els[k].kind != "road", k)):
+        for p in pieces[k]:
+            p.road_id = rid
+            rid += 1
+    # regions (aux lanes, width transitions) and links
+    for j in junctions:
+        e = j.event
+        par, ramp = els[e.parent], els[e.ramp]
+        pp, rp = j.pieces["parent"], j.pieces["ramp"]
+        plist, rlist = pieces[e.parent], pieces[e.ramp]
+        pi, ri = plist.index(pp), rlist.index(rp)
+        if e.out:
+            up, down, rbody = plist[pi - 1], plist[pi + 1], rlist[ri + 1]
+            up.end_region = ("aux", e.side, ramp.lanes, ramp.width)
+            up.succ = ("junction", j.id)
+            down.pred = ("junction", j.id)
+            rbody.pred = ("junction", j.id)
+            pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
+            rp.pred, rp.succ = ("road", up.road_id, "end"), ("road", rbody.road_id, "start")
+        else:
+            up, down, rbody = plist[pi - 1], plist[pi + 1], rlist[ri - 1]
+            down.start_region = ("aux", e.side, ramp.lanes, ramp.width)
+            up.succ = ("junction", j.id)
+            rbody.succ = ("junction", j.id)
+            down.pred = ("junction", j.id)
+            pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
+            rp.pred, rp.succ = ("road", rbody.road_id, "end"), ("road", down.road_id, "start")
+    for e in _events(g):
+        if e.side != "M":
+            continue
+        par, ramp = els[e.parent], els[e.ramp]
+        if e.out:  # parent ends, ramp begins
+            a, b = pieces[e.parent][-1], pieces[e.ramp][0]
+            b.start_region = ("trans", par.lanes, par.width)
+        else:  # ramp ends, parent begins
+            a, b = pieces[e.ramp][-1], pieces[e.parent][0]
+            a.end_region = ("trans", par.lanes, par.width)
+        if a.junction is not None or b.junction is not None:
+            raise ExportError(f"straight-on link {e.parent}/{e.ramp} too close to a junction",
+                              element=e.ramp)
+        a.succ, b.pred = ("road", b.road_id, "start"), ("road", a.road_id, "end")
+    # lane sections of every piece
+    layouts: dict[int, list] = {}
+    for k, plist in pieces.items():
+        el = els[k]
+        for p in plist:
+            L = p.s1 - p.s0
+            if p.junction is not None:
+                layouts[p.road_id] = [(0.0, (_const(0.0), [(("b", i), _const(el.width))
+                                                          for i in range(1, el.lanes + 1)]
+                                             + [(("sh",), _const(sh))]))]
+                continue
+            n_reg = (p.start_region is not None) + (p.end_region is not None)
+            T = min(opts.taper_length_m, L / max(n_reg, 1))
+            layouts[p.road_id] = _lanes_layout(el, p, T, T, sh)
+
+    def ids(rid_: int, which: int) -> dict[tuple, int]:
+        secs = layouts[rid_]
+        _, (_, lanes) = secs[which]
+        return {key: -(i + 1) for i, (key, _) in enumerate(lanes)}
+
+    # lane links across roads: (road_id, 'first'|'last') -> {key: other lane id}
+    by_id = {p.road_id: p for plist in pieces.values() for p in plist}
+    pred_links: dict[int, dict[tuple, int]] = {}
+    succ_links: dict[int, dict[tuple, int]] = {}
+    conn_links: list[tuple[int, int, int, list[tuple[int, int]]]] = []  # junction, incoming, connecting, links
+
+    def keymap(src: dict[tuple, int], dst: dict[tuple, int], mapping) -> list[tuple[int, int]]:
+        out = []
+        for key, lid in src.items():
+            k2 = mapping(key)
+            if k2 is not None and k2 in dst:
+                out.append((lid, dst[k2]))
+        return out
+
+    same = lambda k: k if k[0] in ("b", "sh") else None  # noqa: E731
+    for j in junctions:
+        e = j.event
+        pp, rp = j.pieces["parent"], j.pieces["ramp"]
+        up = by_id[pp.pred[1]]
+        up_ids = ids(up.road_id, -1)
+        pp_ids, rp_ids = ids(pp.road_id, 0), ids(rp.road_id, 0)
+        if e.out:
+            side = e.side
+            to_ramp = lambda k: ("b", k[1]) if k[0] == "aux" else (k if (k[0] == "sh" and side == "R") else None)  # noqa: E731
+            to_par = lambda k: k if (k[0] == "b" or (k[0] == "sh" and side == "L")) else None  # noqa: E731
+            conn_links.append((j.id, up.road_id, pp.road_id, keymap(up_ids, pp_ids, to_par)))
+            conn_links.append((j.id, up.road_id, rp.road_id, keymap(up_ids, rp_ids, to_ramp)))
+            down, rbody = by_id[pp.succ[1]], by_id[rp.succ[1]]
+            succ_links[pp.road_id] = dict(keymap(pp_ids, ids(down.road_id, 0), same))
+            succ_links[rp.road_id] = dict(keymap(rp_ids, ids(rbody.road_id, 0), same))
+            pred_links[pp.road_id] = dict((b, a) for a, b in conn_links[-2][3])
+            pred_links[rp.road_id] = dict((b, a) for a, b in conn_links[-1][3])
+        else:
+            side = e.side
+            rbody = by_id[rp.pred[1]]
+            down = by_id[pp.succ[1]]
+            down_ids = ids(down.road_id, 0)
+            conn_links.append((j.id, up.road_id, pp.road_id, keymap(up_ids, pp_ids, same)))
+            conn_links.append((j.id, rbody.road_id, rp.road_id, keymap(ids(rbody.road_id, -1), rp_ids, same)))
+            from_par = lambda k: k if (k[0] == "b" or (k[0] == "sh" and side == "L")) else None  # noqa: E731
+            from_ramp = lambda k: ("aux", k[1]) if k[0] == "b" else (k if (k[0] == "sh" and side == "R") else None)  # noqa: E731
+            succ_links[pp.road_id] = dict(keymap(pp_ids, down_ids, from_par))
+            succ_links[rp.road_id] = dict(keymap(rp_ids, down_ids, from_ramp))
+            pred_links[pp.road_id] = dict((b, a) for a, b in conn_links[-2][3])
+            pred_links[rp.road_id] = dict((b, a) for a, b in conn_links[-1][3])
+    for e in _events(g):
+        if e.side != "M":
+            continue
+        a, b = ((pieces[e.parent][-1], pieces[e.ramp][0]) if e.out
+                else (pieces[e.ramp][-1], pieces[e.parent][0]))
+        a_ids, b_ids = ids(a.road_id, -1), ids(b.road_id, 0)
+        if e.out:  # ramp b's first section holds keys b/x for parent lanes 1..n
+            fwd = lambda k: k if k[0] == "sh" else (("b", k[1]) if ("b", k[1]) in b_ids else ("x", k[1]))  # noqa: E731
+        else:  # ramp a's last section holds b/x keys that become parent lanes
+            fwd = lambda k: k if k[0] == "sh" else ("b", k[1])  # noqa: E731
+        links = keymap(a_ids, b_ids, fwd)
+        succ_links[a.road_id] = dict(links)
+        pred_links[b.road_id] = dict((y, x) for x, y in links)
+
+    # -- XML ------------------------------------------------------------------------
+    root = etree.Element("OpenDRIVE")
+    allpts = []
+    for k, plist in pieces.items():
+        el = els[k]
+        ss = np.linspace(0.0, el.length, max(2, int(el.length // 5) + 2))
+        for s in ss:
+            x, y, h = el.pose(float(s))
+            wdt = el.lanes * el.width + sh + 2 * el.width
+            allpts += [(x + wdt * math.sin(h) * sg, y - wdt * math.cos(h) * sg) for sg in (-1, 1)]
+    pts = np.array(allpts)
+    head = etree.SubElement(root, "header", revMajor="1", revMinor="7",
+                            name=name or f"{g.class_id}/{g.sample}", version="1",
+                            north=_f(pts[:, 1].max()), south=_f(pts[:, 1].min()),
+                            east=_f(pts[:, 0].max()), west=_f(pts[:, 0].min()), vendor="flyover")
+    etree.SubElement(head, "userData", code="flyover:frame", value=FRAME_NOTE)
+    etree.SubElement(head, "userData", code="flyover:source",
+                     value=f"class_id={g.class_id} sample={g.sample} seed={g.seed}")
+    for k in sorted(els, key=lambda k: (els[k].kind != "road", k)):
+        el = els[k]
+        for p in pieces[k]:
+            _write_road(root, el, p, layouts[p.road_id], pred_links.get(p.road_id, {}),
+                        succ_links.get(p.road_id, {}), ids)
+    for j in junctions:
+        je = etree.SubElement(root, "junction", id=str(j.id),
+                              name=f"{j.event.parent}/{j.event.ramp}", type="default")
+        cid = 0
+        for jid, inc, con, links in conn_links:
+            if jid != j.id:
+                continue
+            c = etree.SubElement(je, "connection", id=str(cid), incomingRoad=str(inc),
+                                 connectingRoad=str(con), contactPoint="start")
+            for a, b in sorted(links, key=lambda t: -t[0]):
+                etree.SubElement(c, "laneLink", **{"from": str(a), "to": str(b)})
+            cid += 1
+    return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+
+
+def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict, ids) -> None:
+    L = p.s1 - p.s0
+    road = etree.SubElement(root, "road", name=el.id, length=_f(L), id=str(p.road_id),
+                            junction=str(p.junction if p.junction is not None else -1), rule="RHT")
+    if p.pred or p.succ:
+        link = etree.SubElement(road, "link")
+        for tag, val in (("predecessor", p.pred), ("successor", p.succ)):
+            if val is None:
+                continue
+            if val[0] == "junction":
+                etree.SubElement(link, tag, elementType="junction", elementId=str(val[1]))
+            else:
+                etree.SubElement(link, tag, elementType="road", elementId=str(val[1]),
+                                 contactPoint=val[2])
+    etree.SubElement(road, "type", s="0.0", type="motorway")
+    pv = etree.SubElement(road, "planView")
+    s = 0.0
+    for rec in el.plan(p.s0, p.s1):
+        ge = etree.SubElement(pv, "geometry", s=_f(s), x=_f(rec.x), y=_f(rec.y), hdg=_f(rec.hdg),
+                              length=_f(rec.length))
+        if isinstance(rec, Line):
+            etree.SubElement(ge, "line")
+        else:
+            etree.SubElement(ge, "paramPoly3", aU=_f(rec.u[0]), bU=_f(rec.u[1]), cU=_f(rec.u[2]),
+                             dU=_f(rec.u[3]), aV=_f(rec.v[0]), bV=_f(rec.v[1]), cV=_f(rec.v[2]),
+                             dV=_f(rec.v[3]), pRange="normalized")
+        s += rec.length
+    if abs(s - L) > 1e-3:
+        log.debug("%s road %d: plan length %.6f vs %.6f", el.id, p.road_id, s, L)
+    road.set("length", _f(s))
+    ep = etree.SubElement(road, "elevationProfile")
+    for c in el.elevation_part(p.s0, p.s1):
+        etree.SubElement(ep, "elevation", **_cubic_attrs(c))
+    etree.SubElement(road, "lateralProfile")
+    lanes_el = etree.SubElement(road, "lanes")
+    offsets, prev = [], None
+    for s0, (off, _) in layout:
+        c = Cubic(s0, off.a, off.b, off.c, off.d)
+        if prev is None or (c.a, c.b, c.c, c.d) != (prev.a, prev.b, prev.c, prev.d) or prev.b or prev.c or prev.d:
+            if not (prev is None and c.a == 0 and c.b == 0 and c.c == 0 and c.d == 0):
+                offsets.append(c)
+            prev = c
+    if offsets and offsets[0].s > 0:
+        offsets.insert(0, Cubic(0.0, 0.0, 0.0, 0.0, 0.0))
+    for c in offsets:
+        etree.SubElement(lanes_el, "laneOffset", **_cubic_attrs(c))
+    for idx, (s0, (_, lanes)) in enumerate(layout):
+        sec = etree.SubElement(lanes_el, "laneSection", s=_f(s0))
+        ctr = etree.SubElement(sec, "center")
+        cl = etree.SubElement(ctr, "lane", id="0", type="none", level="false")
+        etree.SubElement(cl, "roadMark", sOffset="0.0", type="solid", weight="standard",
+                         color="yellow" if True else "", width="0.15", laneChange="none")
+        right = etree.SubElement(sec, "right")
+        prev_keys = {key: -(i + 1) for i, (key, _) in enumerate(layout[idx - 1][1][1])} if idx > 0 else {}
+        next_keys = ({key: -(i + 1) for i, (key, _) in enumerate(layout[idx + 1][1][1])}
+                     if idx + 1 < len(layout) else {})
+        for i, (key, w) in enumerate(lanes):
+            lid = -(i + 1)
+            lane = etree.SubElement(right, "lane", id=str(lid),
+                                    type="shoulder" if key[0] == "sh" else "driving", level="false")
+            pred = prev_keys.get(key) if idx > 0 else preds.get(lid)
+            succ = next_keys.get(key) if idx + 1 < len(layout) else succs.get(lid)
+            if idx > 0 and key[0] == "x":
+                pred = None
+            # a lane that starts (ends) at zero width has no predecessor (successor)
+            if abs(w.a) < 1e-9:
+                pred = None
+            wend = w.a + w.b * 1 + 0  # placeholder, end width computed below
+            sec_len = (layout[idx + 1][0] if idx + 1 < len(layout) else road_len(road)) - s0
+            wend = float(w(sec_len))
+            if abs(wend) < 1e-9:
+                succ = None
+            if pred is not None or succ is not None:
+                ln = etree.SubElement(lane, "link")
+                if pred is not None:
+                    etree.SubElement(ln, "predecessor", id=str(pred))
+                if succ is not None:
+                    etree.SubElement(ln, "successor", id=str(succ))
+            etree.SubElement(lane, "width", **_cubic_attrs(w, "sOffset"))
+            etree.SubElement(lane, "roadMark", sOffset="0.0",
+                             type="solid" if key[0] == "sh" or i == len(lanes) - 2 else "broken",
+                             weight="standard", color="white", width="0.15",
+                             laneChange="none" if key[0] == "sh" else "both")
+            if key[0] != "sh":
+                etree.SubElement(lane, "speed", sOffset="0.0", max="22.22" if el.kind == "ramp" else "33.33",
+                                 unit="m/s")
+
+
+def road_len(road) -> float:
+    return float(road.get("length"))
+
+
+def write_xodr(g: InterchangeGeometry, path: str | os.PathLike,
+               options: ExportOptions | None = None) -> None:
+    """Write ``interchange.xodr`` atomically."""
+    from flyover.topology.io import atomic_write  # noqa: PLC0415
+
+    atomic_write(path, xodr_bytes(g, options))
