@@ -1,0 +1,116 @@
+"""Cubic Bézier splines in the plane, evaluated for whole DE populations at once.
+
+A spline of ``n`` cubic pieces is an array of control points of shape
+``(..., n, 4, 2)``; every function here broadcasts over the leading axes, so a
+population of ``P`` candidate ramps is one array ``(P, n, 4, 2)``.
+
+Example
+-------
+>>> import numpy as np
+>>> k = 0.5522847498  # quarter circle of radius 100
+>>> c = np.array([[[0, 0], [100 * k, 0], [100, 100 * (1 - k)], [100, 100]]], float)
+>>> s = sample_spline(c, 64)
+>>> round(float(1 / np.abs(s.curvature).max()), 1), round(float(s.length), 1)
+(99.2, 157.1)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = ["SplineSamples", "sample_spline", "lane_radius", "turning", "heading_vec"]
+
+
+@lru_cache(maxsize=16)
+def _basis(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    t = np.linspace(0.0, 1.0, m)
+    u = 1.0 - t
+    b = np.stack([u**3, 3 * u**2 * t, 3 * u * t**2, t**3], axis=1)
+    db = np.stack([-3 * u**2, 3 * u**2 - 6 * u * t, 6 * u * t - 3 * t**2, 3 * t**2], axis=1)
+    ddb = np.stack([6 * u, -12 * u + 6 * t, 6 * u - 12 * t, 6 * t], axis=1)
+    return t, b, db, ddb
+
+
+def heading_vec(theta: np.ndarray) -> np.ndarray:
+    """Unit vectors ``(..., 2)`` for headings ``theta`` (radians from +x)."""
+    theta = np.asarray(theta, float)
+    return np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+
+
+@dataclass(frozen=True)
+class SplineSamples:
+    """Points sampled uniformly in the Bézier parameter of every piece.
+
+    Attributes
+    ----------
+    xy
+        ``(..., n*m, 2)`` points in travel order (pieces concatenated).
+    s
+        ``(..., n*m)`` arc length from the start (trapezoid rule).
+    curvature
+        ``(..., n*m)`` signed curvature (positive = turning left).
+    tangent
+        ``(..., n*m, 2)`` first derivatives (not normalised).
+    piece_length
+        ``(..., n)`` arc length of each piece.
+    """
+
+    xy: np.ndarray
+    s: np.ndarray
+    curvature: np.ndarray
+    tangent: np.ndarray
+    piece_length: np.ndarray
+
+    @property
+    def length(self) -> np.ndarray:
+        """Total arc length ``(...)``."""
+        return self.piece_length.sum(axis=-1)
+
+
+def sample_spline(ctrl: np.ndarray, m: int = 32) -> SplineSamples:
+    """Sample every piece of ``ctrl`` ``(..., n, 4, 2)`` at ``m`` parameter values."""
+    ctrl = np.asarray(ctrl, float)
+    _, b, db, ddb = _basis(m)
+    p = np.einsum("mk,...kd->...md", b, ctrl)
+    d1 = np.einsum("mk,...kd->...md", db, ctrl)
+    d2 = np.einsum("mk,...kd->...md", ddb, ctrl)
+    speed = np.hypot(d1[..., 0], d1[..., 1])
+    cross = d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]
+    kappa = cross / np.maximum(speed, 1e-9) ** 3
+    seg = 0.5 * (speed[..., 1:] + speed[..., :-1]) / (m - 1)
+    piece_len = seg.sum(axis=-1)
+    local = np.concatenate([np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)], axis=-1)
+    offsets = np.cumsum(piece_len, axis=-1) - piece_len
+    s = local + offsets[..., None]
+    lead = ctrl.shape[:-3]
+    n = ctrl.shape[-3]
+    return SplineSamples(
+        xy=p.reshape(lead + (n * m, 2)),
+        s=s.reshape(lead + (n * m,)),
+        curvature=kappa.reshape(lead + (n * m,)),
+        tangent=d1.reshape(lead + (n * m, 2)),
+        piece_length=piece_len,
+    )
+
+
+def lane_radius(curvature: np.ndarray, width_m: float) -> np.ndarray:
+    """Radius of the lane centre line, ``width_m/2`` right of a left-edge reference line.
+
+    Offsetting a curve of signed curvature ``κ`` by ``w/2`` to the right gives
+    the radius ``|1/κ + w/2|`` (infinite where ``κ = 0``).
+    """
+    k = np.asarray(curvature, float)
+    with np.errstate(divide="ignore"):
+        r = np.abs(1.0 / k + 0.5 * width_m)
+    return np.where(k == 0.0, np.inf, r)
+
+
+def turning(tangent: np.ndarray) -> np.ndarray:
+    """Total signed heading change ``(...)`` along sampled tangents ``(..., N, 2)``."""
+    ang = np.arctan2(tangent[..., 1], tangent[..., 0])
+    d = np.diff(ang, axis=-1)
+    d = (d + np.pi) % (2 * np.pi) - np.pi
+    return d.sum(axis=-1)

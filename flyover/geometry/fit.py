@@ -1,0 +1,431 @@
+"""Fitting one ramp by differential evolution (paper Algorithm 1).
+
+The plan view of a ramp is a G1 chain of ``n`` cubic Bézier pieces. Its ends
+lie on *rails* (the reference line of the parent road or ramp, at a lateral
+offset) and take the parent's heading there, so position and heading at both
+ends hold **by construction**; the optimiser chooses where along each rail the
+ramp attaches, the tangent lengths, and the position, heading and tangent
+lengths of the interior joints. A ramp whose end is not attached to anything
+(a stub that splits into other ramps, or one formed by merging ramps) has a
+*free* end whose pose, relative to the other end, is part of the search.
+
+The vertical profile (:mod:`flyover.geometry.profile`) follows from the plan
+length, so the maximum slope equals its target exactly whenever the ramp is
+long enough; the search makes it long enough.
+
+Objective (whole population at once, numpy): curvature variance + radius
+error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
+penalties: wrong total turn (loops, cusps), same-level conflicts with roads
+and already fitted ramps, and curvature jumps at joints (G2 preferred).
+
+Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
+of the reference line). A target of ``inf`` on a ramp that has to turn means
+*no minimum-radius constraint*: the ramp is fitted as the gentlest curve its
+ends allow (curvature² is minimised instead of matching a radius) and its
+radius always counts as within tolerance.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import differential_evolution
+
+from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline, turning
+from flyover.geometry.profile import climb_distance, elevation_polys, heights, max_grade
+from flyover.geometry.model import BezierPiece, ElevationPoly
+
+__all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
+           "ramp_objective"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class Rail:
+    """Where one end of a ramp may attach: along a parent's reference line.
+
+    ``s``, ``xy``, ``heading`` (unwrapped) and ``z`` are stations of the
+    parent's reference line; the ramp's reference line sits ``offset_m`` to
+    the left of it (negative = right) and may attach anywhere in ``lo..hi``.
+    """
+
+    parent: str
+    label: str
+    s: np.ndarray
+    xy: np.ndarray
+    heading: np.ndarray
+    z: np.ndarray
+    offset_m: float
+    lo: float
+    hi: float
+
+    @classmethod
+    def line(cls, parent: str, label: str, origin, heading: float, z: float, offset_m: float,
+             lo: float, hi: float) -> "Rail":
+        """A rail along a straight line through ``origin`` (``s`` = signed distance)."""
+        s = np.array([min(lo, -1e4), max(hi, 1e4)])
+        xy = np.asarray(origin, float) + s[:, None] * heading_vec(heading)
+        return cls(parent, label, s, xy, np.full(2, heading), np.full(2, z), offset_m, lo, hi)
+
+    def at(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Points ``(P, 2)`` (offset applied), headings and heights at stations ``s``."""
+        s = np.atleast_1d(np.asarray(s, float))
+        x = np.interp(s, self.s, self.xy[:, 0])
+        y = np.interp(s, self.s, self.xy[:, 1])
+        h = np.interp(s, self.s, self.heading)
+        z = np.interp(s, self.s, self.z)
+        n = heading_vec(h + np.pi / 2)
+        return np.stack([x, y], axis=-1) + self.offset_m * n, h, z
+
+
+@dataclass(frozen=True)
+class FreeEnd:
+    """A free end, placed relative to the ramp's other (attached) end.
+
+    ``forward``/``lateral`` (metres, lateral positive = left) and ``turn``
+    (radians) are search ranges; ``z`` is the end's height.
+    """
+
+    forward: tuple[float, float]
+    lateral: tuple[float, float]
+    turn: tuple[float, float]
+    z: float
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacles:
+    """Already placed elements a ramp must not meet at the same level.
+
+    ``lines``: rows ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, z`` (a road's
+    driving band in its own frame). ``points``/``z``/``half_width``: lane-centre
+    samples of fitted ramps. ``names`` label the lines and point groups.
+    """
+
+    lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 9)))
+    points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    z: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    half_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    owner: tuple[str, ...] = ()
+    line_names: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class RampSpec:
+    """What one ramp has to be: its ends, turn, width and targets."""
+
+    id: str
+    start: Rail | None
+    end: Rail | None
+    free: FreeEnd | None
+    turn_rad: float
+    pieces: int
+    width_m: float
+    target_radius_m: float
+    target_slope_pct: float
+    z_crest: float | None = None
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Settings of the search and the tolerances (from config ``geometry``)."""
+
+    popsize: int = 8
+    maxiter: int = 400
+    min_generations: int = 25
+    tol_radius: float = 0.05
+    tol_slope_pp: float = 0.2
+    accept_radius: float = 0.02
+    clearance_m: float = 5.5
+    transition_m: float = 40.0
+    end_zone_m: float = 15.0
+    margin_m: float = 0.5
+    inf_reference_m: float = 250.0
+    samples: int = 24
+    vectorized: bool = True
+
+
+@dataclass(frozen=True)
+class RampFit:
+    """The fitted ramp, measured on the final curve (densely sampled)."""
+
+    spec: RampSpec
+    ctrl: np.ndarray
+    start_s: float
+    end_s: float
+    start_pose: tuple[float, float, float, float]
+    end_pose: tuple[float, float, float, float]
+    elevation: tuple[ElevationPoly, ...]
+    length_m: float
+    min_radius_m: float
+    max_slope_pct: float
+    conflicts: int
+    evaluations: int
+    seconds: float
+    z_crest: float
+
+    @property
+    def radius_ok(self) -> bool:
+        t = self.spec.target_radius_m
+        return math.isinf(t) or abs(self.min_radius_m - t) <= 0.05 * t
+
+    @property
+    def slope_ok(self) -> bool:
+        return abs(self.max_slope_pct - self.spec.target_slope_pct) <= 0.2
+
+    @property
+    def ok(self) -> bool:
+        return self.radius_ok and self.slope_ok and self.conflicts == 0
+
+    def pieces(self) -> tuple[BezierPiece, ...]:
+        smp = sample_spline(self.ctrl, 400)
+        return tuple(BezierPiece(tuple(map(tuple, c.tolist())), float(l))
+                     for c, l in zip(self.ctrl, smp.piece_length))
+
+
+# -- decoding a population ----------------------------------------------------
+
+def _n_vars(spec: RampSpec) -> int:
+    n = (spec.start is not None) + (spec.end is not None) + (3 if spec.free else 0)
+    return n + 2 + 5 * (spec.pieces - 1)
+
+
+def bounds(spec: RampSpec) -> list[tuple[float, float]]:
+    """Search bounds of the decision vector of ``spec``."""
+    b: list[tuple[float, float]] = []
+    for rail in (spec.start, spec.end):
+        if rail is not None:
+            b.append((rail.lo, rail.hi))
+    if spec.free:
+        b += [spec.free.forward, spec.free.lateral, spec.free.turn]
+    b += [(0.05, 0.8), (0.05, 0.8)]
+    for _ in range(spec.pieces - 1):
+        b += [(-0.8, 0.8), (-2.0, 2.0), (-np.pi / 3, np.pi / 3), (0.05, 0.8), (0.05, 0.8)]
+    return b
+
+
+@dataclass(frozen=True)
+class _Decoded:
+    ctrl: np.ndarray  # (P, n, 4, 2)
+    sa: np.ndarray
+    sb: np.ndarray
+    a: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # x, y, heading, z
+    b: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    turn: np.ndarray  # intended total heading change (P,)
+
+
+def _decode(spec: RampSpec, x: np.ndarray) -> _Decoded:
+    """Control points for decision vectors ``x`` of shape ``(D, P)``."""
+    i = 0
+    p = x.shape[1]
+    sa = sb = np.zeros(p)
+    if spec.start is not None:
+        sa = x[i]
+        pa, ha, za = spec.start.at(sa)
+        i += 1
+    if spec.end is not None:
+        sb = x[i]
+        pb, hb, zb = spec.end.at(sb)
+        i += 1
+    if spec.free is not None:
+        d, e, phi = x[i], x[i + 1], x[i + 2]
+        i += 3
+        if spec.start is not None:  # free end
+            t, n = heading_vec(ha), heading_vec(ha + np.pi / 2)
+            pb = pa + d[:, None] * t + e[:, None] * n
+            hb, zb = ha + spec.turn_rad + phi, np.full(p, spec.free.z)
+        else:  # free start
+            t, n = heading_vec(hb), heading_vec(hb + np.pi / 2)
+            pa = pb - d[:, None] * t + e[:, None] * n
+            ha, za = hb - spec.turn_rad - phi, np.full(p, spec.free.z)
+    lam_a, lam_b = x[i], x[i + 1]
+    i += 2
+    # intended total turn: the representative of hb - ha nearest spec.turn_rad
+    raw = hb - ha
+    turn = spec.turn_rad + ((raw - spec.turn_rad + np.pi) % (2 * np.pi) - np.pi)
+    n_p = spec.pieces
+    chord = pb - pa
+    dist = np.maximum(np.hypot(chord[:, 0], chord[:, 1]), 1.0)
+    cdir = chord / dist[:, None]
+    cper = np.stack([-cdir[:, 1], cdir[:, 0]], axis=-1)
+    joints = [pa]
+    heads = [ha]
+    lam_in = []
+    lam_out = [lam_a]
+    for k in range(1, n_p):
+        u, v, dh, bi, ao = x[i:i + 5]
+        i += 5
+        base = pa + (k / n_p) * chord
+        joints.append(base + (u * dist)[:, None] * cdir + (v * dist)[:, None] * cper)
+        heads.append(ha + turn * k / n_p + dh)
+        lam_in.append(bi)
+        lam_out.append(ao)
+    joints.append(pb)
+    heads.append(ha + turn)
+    lam_in.append(lam_b)
+    ctrl = np.empty((p, n_p, 4, 2))
+    for k in range(n_p):
+        p0, p3 = joints[k], joints[k + 1]
+        span = np.hypot(*(p3 - p0).T)[:, None]
+        ctrl[:, k, 0] = p0
+        ctrl[:, k, 1] = p0 + lam_out[k][:, None] * span * heading_vec(heads[k])
+        ctrl[:, k, 2] = p3 - lam_in[k][:, None] * span * heading_vec(heads[k + 1])
+        ctrl[:, k, 3] = p3
+    return _Decoded(ctrl, sa, sb, (pa[:, 0], pa[:, 1], ha, za), (pb[:, 0], pb[:, 1], hb, zb), turn)
+
+
+def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
+    top = np.maximum(za, zb)
+    return top if spec.z_crest is None else np.maximum(top, spec.z_crest)
+
+
+def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
+               settings: FitSettings) -> np.ndarray:
+    """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level."""
+    speed = np.maximum(np.hypot(tangent[..., 0], tangent[..., 1]), 1e-9)
+    right = np.stack([tangent[..., 1], -tangent[..., 0]], axis=-1) / speed[..., None]
+    c = xy + 0.5 * spec.width_m * right
+    inner = (s > settings.end_zone_m) & (s < length[:, None] - settings.end_zone_m)
+    hw = 0.5 * spec.width_m - settings.margin_m
+    bad = np.zeros(s.shape, bool)
+    for x0, y0, dx, dy, tlo, thi, llo, lhi, zl in obstacles.lines:
+        rx, ry = c[..., 0] - x0, c[..., 1] - y0
+        along = rx * dx + ry * dy
+        lat = dx * ry - dy * rx
+        hit = (along > tlo) & (along < thi) & (lat > llo - hw) & (lat < lhi + hw)
+        bad |= hit & (np.abs(z - zl) < settings.clearance_m)
+    if len(obstacles.points):
+        q = obstacles.points
+        d2 = ((c[..., None, :] - q) ** 2).sum(-1)  # (P, N, M)
+        near = d2 < (hw + obstacles.half_width) ** 2
+        low = np.abs(z[..., None] - obstacles.z) < settings.clearance_m
+        bad |= (near & low).any(-1)
+    return (bad & inner).sum(-1)
+
+
+def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
+    """The DE objective of ``spec``: ``f(x)`` with ``x`` of shape ``(D, P)`` → ``(P,)``.
+
+    Also returns a function giving the per-candidate terms, for stopping.
+    """
+    m = settings.samples
+    g = spec.target_slope_pct / 100.0
+    r_t = spec.target_radius_m
+
+    def terms(x: np.ndarray) -> dict[str, np.ndarray]:
+        dec = _decode(spec, x)
+        smp = sample_spline(dec.ctrl, m)
+        length = smp.length
+        kappa = smp.curvature
+        rmin = lane_radius(kappa, spec.width_m).min(-1)
+        za, zb = dec.a[3], dec.b[3]
+        zc = _crest(spec, za, zb)
+        need = climb_distance(zc - za, g, settings.transition_m) + \
+            climb_distance(zc - zb, g, settings.transition_m) if g > 0 else 0 * length
+        shortfall = np.clip(need - length, 0, None) / np.maximum(need, 1.0)
+        if g <= 0:
+            shortfall = np.where(np.abs(za - zb) > 1e-6, 1.0, 0.0) + 0 * length
+        turn_err = np.abs(turning(smp.tangent) - dec.turn)
+        kk = kappa.reshape(kappa.shape[0], spec.pieces, m)
+        g2 = ((kk[:, 1:, 0] - kk[:, :-1, -1]) ** 2).sum(-1) if spec.pieces > 1 else 0 * length
+        if math.isinf(r_t):
+            rad_err = 0 * length
+            smooth = (kappa**2).mean(-1) * settings.inf_reference_m**2
+            g2 = g2 * settings.inf_reference_m**2
+        else:
+            rad_err = (rmin - r_t) / r_t
+            smooth = kappa.var(-1) * r_t**2
+            g2 = g2 * r_t**2
+        z = heights(smp.s, length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
+        conf = _conflicts(spec, smp.xy, smp.tangent, smp.s, z, length, obstacles, settings)
+        r_eff = min(r_t, settings.inf_reference_m)
+        l_ref = 1.2 * np.maximum(need, r_eff * np.abs(dec.turn) + 2 * settings.transition_m)
+        excess = np.clip(length / l_ref - 1.0, 0, None)
+        return {"rad_err": rad_err, "smooth": smooth, "shortfall": shortfall, "excess": excess,
+                "turn_err": turn_err, "g2": g2, "conflicts": conf}
+
+    def f(x: np.ndarray) -> np.ndarray:
+        t = terms(x)
+        return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
+                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.02 * t["conflicts"]
+                + 0.01 * np.minimum(t["g2"], 10.0) + 0.5 * t["excess"] ** 2)
+
+    return f, terms
+
+
+def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
+             settings: FitSettings | None = None, seed: int = 0) -> RampFit:
+    """Fit one ramp by differential evolution and measure the result.
+
+    Parameters
+    ----------
+    spec
+        Ends, turn, width and targets.
+    obstacles
+        Roads and ramps already placed (same-level conflicts are penalised).
+    settings
+        DE settings and tolerances.
+    seed
+        Seed of the search (same seed → same curve).
+    """
+    import time  # noqa: PLC0415
+
+    obstacles = obstacles or Obstacles()
+    settings = settings or FitSettings()
+    f, terms = ramp_objective(spec, obstacles, settings)
+    b = bounds(spec)
+    gen = [0]
+    count = [0]
+
+    def counted(x: np.ndarray) -> np.ndarray:
+        count[0] += x.shape[1]
+        return f(x)
+
+    def good(xk: np.ndarray) -> bool:
+        t = terms(xk[:, None])
+        return bool(np.abs(t["rad_err"][0]) < settings.accept_radius and t["shortfall"][0] == 0
+                    and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0)
+
+    def stop(intermediate_result) -> bool:
+        gen[0] += 1
+        return gen[0] >= settings.min_generations and good(intermediate_result.x)
+
+    t0 = time.perf_counter()
+    if settings.vectorized:
+        res = differential_evolution(counted, b, popsize=settings.popsize, maxiter=settings.maxiter,
+                                     seed=seed, tol=1e-8, polish=False, vectorized=True,
+                                     updating="deferred", callback=stop, init="sobol")
+    else:
+        res = differential_evolution(lambda x: float(counted(x[:, None])[0]), b,
+                                     popsize=settings.popsize, maxiter=settings.maxiter,
+                                     seed=seed, tol=1e-8, polish=False, callback=stop,
+                                     init="sobol")
+    seconds = time.perf_counter() - t0
+    return measure(spec, res.x, obstacles, settings, count[0], seconds)
+
+
+def measure(spec: RampSpec, x: np.ndarray, obstacles: Obstacles, settings: FitSettings,
+            evaluations: int = 0, seconds: float = 0.0) -> RampFit:
+    """Build the final ramp from decision vector ``x`` and measure it densely."""
+    dec = _decode(spec, np.asarray(x, float)[:, None])
+    ctrl = dec.ctrl[0]
+    dense = sample_spline(ctrl, 400)
+    length = float(dense.length)
+    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
+    za, zb = float(dec.a[3][0]), float(dec.b[3][0])
+    zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
+    g = spec.target_slope_pct / 100.0
+    polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
+    slope = max_grade(polys, length) * 100.0
+    coarse = sample_spline(ctrl, 64)
+    from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
+
+    z, _ = evaluate_polys(polys, coarse.s.ravel())
+    conf = int(_conflicts(spec, coarse.xy[None], coarse.tangent[None], coarse.s[None], z[None],
+                          np.array([length]), obstacles, settings)[0])
+    pose = lambda e: tuple(float(v[0]) for v in e)  # noqa: E731
+    return RampFit(spec, ctrl, float(dec.sa[0]), float(dec.sb[0]), pose(dec.a), pose(dec.b),
+                   polys, length, rmin, slope, conf, evaluations, seconds, zc)
