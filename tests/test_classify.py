@@ -92,3 +92,17 @@ def test_canonical_form_agrees_with_vf2_on_random_pairs():
         b = flip_one_label(rng.choice(designs), rng) if rng.random() < 0.5 else rng.choice(designs)
         b = relabel_randomly(b, rng, "z")
         assert (canonical_form(a) == canonical_form(b)) == is_isomorphic(a, b)
+
+
+def test_canonical_orders_pair_into_an_explicit_isomorphism():
+    from flyover.topology.canonical import canonical_labeling
+    from flyover.topology.classify import is_isomorphism
+
+    rng = random.Random(11)
+    for t in CATALOG.values():
+        u = relabel_randomly(t, rng, "q")
+        (fa, oa), (fb, ob) = canonical_labeling(t), canonical_labeling(u)
+        assert fa == fb
+        assert is_isomorphism(t, u, dict(zip(oa, ob)))
+        # a wrong correspondence is caught
+        assert not is_isomorphism(t, u, dict(zip(oa, ob[1:] + ob[:1])))

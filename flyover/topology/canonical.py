@@ -23,7 +23,7 @@ from functools import lru_cache
 
 from flyover.topology.model import Kind, Label, Topology
 
-__all__ = ["canonical_form", "class_id", "CanonicalForm"]
+__all__ = ["canonical_form", "canonical_labeling", "class_id", "class_id_of_form", "CanonicalForm"]
 
 #: (node kinds in canonical order, sorted edges as (i, j, label))
 CanonicalForm = tuple[tuple[str, ...], tuple[tuple[int, int, str], ...]]
@@ -69,7 +69,15 @@ def _search(colors, outs, ins, edges, best):
 
 
 def canonical_form(topology: Topology) -> CanonicalForm:
-    """The canonical form of ``topology`` (equal iff isomorphic).
+    """The canonical form of ``topology`` (equal iff isomorphic); see :func:`canonical_labeling`."""
+    return canonical_labeling(topology)[0]
+
+
+def canonical_labeling(topology: Topology) -> tuple[CanonicalForm, tuple[str, ...]]:
+    """The canonical form of ``topology`` and its nodes in canonical order.
+
+    Two isomorphic topologies have equal forms, and pairing their node orders
+    position by position is an isomorphism between them.
 
     Examples
     --------
@@ -96,7 +104,8 @@ def canonical_form(topology: Topology) -> CanonicalForm:
     order = sorted(range(len(nodes)), key=lambda i: best[1][i])
     labels = list(Label)
     kind_names = tuple(g.nodes[nodes[i]]["kind"].value for i in order)
-    return kind_names, tuple((u, v, labels[lab].value) for u, v, lab in best[0])
+    form = (kind_names, tuple((u, v, labels[lab].value) for u, v, lab in best[0]))
+    return form, tuple(nodes[i] for i in order)
 
 
 @lru_cache(maxsize=None)
@@ -105,6 +114,11 @@ def _digest(form: CanonicalForm) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:10]
 
 
-def class_id(topology: Topology) -> str:
+def class_id_of_form(form: CanonicalForm) -> str:
     """Stable class id: ``"c"`` + 10 hex digits of the canonical form's SHA-256."""
-    return "c" + _digest(canonical_form(topology))
+    return "c" + _digest(form)
+
+
+def class_id(topology: Topology) -> str:
+    """The stable class id of ``topology`` (see :func:`class_id_of_form`)."""
+    return class_id_of_form(canonical_form(topology))
