@@ -1,0 +1,45 @@
+"""Step 1 from open data: OpenStreetMap extracts → interchange topologies.
+
+>>> from flyover.osm import read_osm_topologies  # doctest: +SKIP
+>>> [t.summary() for t in read_osm_topologies("city.osm")]  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+
+from flyover.osm.build import OsmOptions, build_topologies
+from flyover.osm.reader import OsmNetwork, read_motorway_network
+
+__all__ = ["OsmOptions", "read_osm_topologies", "read_motorway_network", "build_topologies",
+           "OsmNetwork", "default_options"]
+
+log = logging.getLogger(__name__)
+
+
+def default_options() -> OsmOptions:
+    """Options from the ``osm:`` section of ``config/config.yaml`` when present, else defaults."""
+    from flyover.config import DEFAULT_CONFIG, load_config  # noqa: PLC0415
+    from flyover.errors import ConfigError  # noqa: PLC0415
+
+    if not DEFAULT_CONFIG.exists():
+        return OsmOptions()
+    try:
+        return OsmOptions.from_config(load_config(DEFAULT_CONFIG))
+    except ConfigError as exc:
+        log.warning("osm options from defaults, config unusable: %s", exc.one_line())
+        return OsmOptions()
+
+
+def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = None):
+    """Every motorway-to-motorway interchange of an OSM XML extract, as topologies.
+
+    Each topology's name is stable (its corridors' refs and its first OSM
+    node id); ``topology.attrs["osm"]`` carries the geometry for
+    :func:`flyover.osm.plot.plot_osm_topology`, ramps carry ``length_m``,
+    ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``).
+    """
+    options = options or default_options()
+    net = read_motorway_network(path, options.highways)
+    return build_topologies(net, options)

@@ -1,0 +1,718 @@
+"""OSM motorway network → interchanges → topologies.
+
+Steps (each survives messy data with a logged reason):
+
+1. **Directed segments.** Every network way becomes directed node-to-node
+   segments: ``oneway=-1`` is reversed, a link tagged ``oneway=no`` is
+   oriented by the flow of its neighbours, ways split into many pieces are
+   joined again through their shared nodes.
+2. **Snapping.** A link end that touches neither the network nor an ordinary
+   road and lies within ``snap_tolerance_m`` of a carriageway is joined to it.
+3. **Connectors tagged motorway.** A short ``motorway`` stretch without ``ref``
+   fed only by links (or feeding only links, or forking off a carriageway) is
+   treated as a link.
+4. **Pruning.** Links not on a carriageway-to-carriageway path (exits to
+   ordinary roads) are dropped unless ``keep_exits``.
+5. **Stretches.** The network is cut at every diverge and merge; road
+   stretches are chained into one-way carriageways (a road node each), link
+   stretches are ramps.
+6. **Labels** from geometry at each junction: a branch's side relative to its
+   parent's direction of travel (right-hand traffic). A carriageway that ends
+   into links: the link on the left is ``Out-M``, others ``Out-R``; one that
+   begins from links: the left one ``In-M``, others ``In-R``. A ramp that
+   splits becomes three ramp nodes (``Out-L``/``Out-R``); ramps that merge
+   feed a new ramp node (``In-L``/``In-R``).
+7. **Interchanges.** Link components joining ≥ 2 corridors (by ``ref``,
+   falling back to geometry), clustered when they share two corridors and lie
+   within ``cluster_distance_m``; two interchanges sharing one carriageway stay
+   separate.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter, defaultdict
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flyover.errors import TopologyError
+from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
+from flyover.osm.reader import OsmNetwork, normalize_ref
+from flyover.topology.model import Connection, Label, Ramp, Road, Topology
+
+__all__ = ["OsmOptions", "build_topologies"]
+
+log = logging.getLogger(__name__)
+
+ROAD, LINK = "road", "link"
+_PROBE_M = 60.0
+
+
+@dataclass(frozen=True)
+class OsmOptions:
+    """How an OSM extract is read (the ``osm:`` section of the config).
+
+    Attributes
+    ----------
+    trunk_as_motorway
+        ``highway=trunk`` / ``trunk_link`` count as motorway / motorway_link.
+    keep_exits
+        Keep links to ordinary roads; each ordinary road they reach becomes
+        a one-carriageway road node of its own expressway.
+    snap_tolerance_m
+        A dangling link end this close to a carriageway is joined to it.
+    cluster_distance_m
+        Link groups of the same two corridors closer than this form one interchange.
+    stem_length_m
+        A carriageway that begins from a link (``In-M``) and receives another
+        link within this distance downstream (not at the same point) is still
+        the stem of a trumpet there: that link merges into the ramp that began
+        the carriageway (catalog ``trumpet``), not into the carriageway.
+    connector_max_length_m
+        A ``motorway`` stretch without ``ref`` between links up to this long is a link.
+    """
+
+    trunk_as_motorway: bool = False
+    keep_exits: bool = False
+    snap_tolerance_m: float = 40.0
+    cluster_distance_m: float = 600.0
+    stem_length_m: float = 250.0
+    connector_max_length_m: float = 400.0
+
+    @classmethod
+    def from_config(cls, config: dict) -> "OsmOptions":
+        sec = dict(config.get("osm") or {})
+        return cls(**{k: sec[k] for k in cls.__dataclass_fields__ if k in sec})
+
+    @property
+    def highways(self) -> frozenset[str]:
+        base = {"motorway", "motorway_link"}
+        if self.trunk_as_motorway:
+            base |= {"trunk", "trunk_link"}
+        return frozenset(base)
+
+
+@dataclass
+class _Stretch:
+    """A run of segments between junctions, all road or all link."""
+
+    idx: int
+    nodes: list[int]
+    cls: str
+    ways: list[int]
+    xy: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def start(self) -> int:
+        return self.nodes[0]
+
+    @property
+    def end(self) -> int:
+        return self.nodes[-1]
+
+    @property
+    def length(self) -> float:
+        return float(arclength(self.xy)[-1])
+
+
+class _Network:
+    """Mutable working state of one extract (segments, stretches, roads)."""
+
+    def __init__(self, net: OsmNetwork, options: OsmOptions):
+        self.src = net.source
+        self.opt = options
+        self.net = net
+        self.quirks: list[str] = []
+        self.ignored: dict[int, str] = {}  # link way id -> why it is in no interchange
+        lat = np.array([c[0] for c in net.coords.values()]) if net.coords else np.zeros(1)
+        lon = np.array([c[1] for c in net.coords.values()]) if net.coords else np.zeros(1)
+        self.proj = LocalProjection(float(lat.mean()), float(lon.mean()))
+        ids = list(net.coords)
+        xy = self.proj.xy([net.coords[i][0] for i in ids], [net.coords[i][1] for i in ids]) \
+            if ids else np.zeros((0, 2))
+        self.xy: dict[int, np.ndarray] = {i: xy[k] for k, i in enumerate(ids)}
+        self.seg: dict[tuple[int, int], int] = {}   # (a, b) -> way id
+        self.cls: dict[int, str] = {}                # way id -> road|link
+        self.ref: dict[int, str | None] = {}
+        self.succ: dict[int, list[int]] = defaultdict(list)
+        self.pred: dict[int, list[int]] = defaultdict(list)
+        self._next_virtual = -1
+
+    def quirk(self, msg: str, level: int = logging.INFO) -> None:
+        self.quirks.append(msg)
+        log.log(level, "%s: %s", self.src, msg)
+
+    # -- 1. segments ------------------------------------------------------
+    def add_ways(self) -> None:
+        undecided = []
+        for wid in sorted(self.net.ways):
+            w = self.net.ways[wid]
+            hw = w.tag("highway")
+            cls = LINK if hw.endswith("_link") else ROAD
+            self.cls[wid] = cls
+            self.ref[wid] = normalize_ref(w.tag("ref"))
+            nodes = [n for n in w.nodes if n in self.xy]
+            if len(nodes) < len(w.nodes):
+                self.quirk(f"way {wid}: {len(w.nodes) - len(nodes)} node(s) outside the extract dropped")
+            if len(nodes) < 2:
+                continue
+            oneway = (w.tag("oneway") or "").lower()
+            if oneway == "-1":
+                nodes.reverse()
+                self.quirk(f"way {wid}: oneway=-1, reversed")
+            elif oneway in ("no", "false", "0") or (hw == "trunk" and oneway not in ("yes", "true", "1")):
+                if cls == ROAD:
+                    self.quirk(f"way {wid}: two-way {hw} is not a carriageway of a dual motorway, ignored")
+                    continue
+                undecided.append((wid, nodes))
+                continue
+            self._add_chain(wid, nodes)
+        for wid, nodes in undecided:
+            a, b = nodes[0], nodes[-1]
+            fwd = (len(self.pred[a]) > 0 and not self.succ[a]) + (len(self.succ[b]) > 0 and not self.pred[b])
+            rev = (len(self.pred[b]) > 0 and not self.succ[b]) + (len(self.succ[a]) > 0 and not self.pred[a])
+            if rev > fwd:
+                nodes = nodes[::-1]
+            self.quirk(f"way {wid}: link tagged oneway=no, taken as one-way "
+                       f"{'against' if rev > fwd else 'along'} its digitised direction "
+                       f"(neighbour flow {max(fwd, rev)}:{min(fwd, rev)})")
+            self._add_chain(wid, nodes)
+
+    def _add_chain(self, wid: int, nodes: list[int]) -> None:
+        for a, b in zip(nodes, nodes[1:]):
+            if a == b or (a, b) in self.seg:
+                continue
+            self.seg[(a, b)] = wid
+            self.succ[a].append(b)
+            self.pred[b].append(a)
+
+    def _remove_seg(self, a: int, b: int) -> None:
+        del self.seg[(a, b)]
+        self.succ[a].remove(b)
+        self.pred[b].remove(a)
+
+    def seg_cls(self, a: int, b: int) -> str:
+        return self.cls[self.seg[(a, b)]]
+
+    def _classes_at(self, n: int) -> tuple[set[str], set[str]]:
+        return ({self.seg_cls(p, n) for p in self.pred[n]}, {self.seg_cls(n, s) for s in self.succ[n]})
+
+    # -- 2. snapping ------------------------------------------------------
+    def snap_dangling_links(self) -> None:
+        road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
+        if not road:
+            return
+        for n in sorted(self.succ.keys() | self.pred.keys()):
+            ins, outs = self._classes_at(n)
+            deg = len(self.pred[n]) + len(self.succ[n])
+            if deg != 1 or ROAD in ins | outs or n in self.net.ordinary:
+                continue
+            road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
+            pa = np.array([self.xy[a] for a, _ in road])
+            pb = np.array([self.xy[b] for _, b in road])
+            d, t = segment_distances(self.xy[n], pa, pb)
+            k = int(np.argmin(d))
+            if d[k] > self.opt.snap_tolerance_m:
+                continue
+            a, b = road[k]
+            wid_road = self.seg[(a, b)]
+            if t[k] <= 1e-6 or t[k] >= 1 - 1e-6:
+                v = a if t[k] <= 1e-6 else b
+            else:
+                v = self._next_virtual
+                self._next_virtual -= 1
+                self.xy[v] = pa[k] + t[k] * (pb[k] - pa[k])
+                self._remove_seg(a, b)
+                self._add_chain(wid_road, [a, v, b])
+            wid_link = self.seg[(self.pred[n][0], n)] if self.pred[n] else self.seg[(n, self.succ[n][0])]
+            self._add_chain(wid_link, [n, v] if self.pred[n] else [v, n])
+            end = "end" if self.pred[n] and self.succ[n] == [v] else "start"
+            self.quirk(f"way {wid_link}: link {end} (node {n}) is {d[k]:.1f} m short of carriageway "
+                       f"way {wid_road}: snapped", logging.WARNING)
+
+    # -- 5. stretches -----------------------------------------------------
+    def _is_break(self, n: int) -> bool:
+        if len(self.pred[n]) != 1 or len(self.succ[n]) != 1:
+            return True
+        return self.seg_cls(self.pred[n][0], n) != self.seg_cls(n, self.succ[n][0])
+
+    def build_stretches(self) -> list[_Stretch]:
+        out: list[_Stretch] = []
+        starts = sorted(n for n in list(self.succ) if self.succ[n] and self._is_break(n))
+        for s0 in starts:
+            for nxt in sorted(self.succ[s0]):
+                nodes, ways = [s0, nxt], [self.seg[(s0, nxt)]]
+                cls = self.seg_cls(s0, nxt)
+                while not self._is_break(nodes[-1]) and len(nodes) <= len(self.seg) + 1:
+                    a = nodes[-1]
+                    b = self.succ[a][0]
+                    nodes.append(b)
+                    if self.seg[(a, b)] != ways[-1]:
+                        ways.append(self.seg[(a, b)])
+                xy = np.array([self.xy[i] for i in nodes])
+                out.append(_Stretch(len(out), nodes, cls, ways, xy))
+        return out
+
+    # -- 3. connectors tagged motorway ------------------------------------
+    def reclassify_connectors(self) -> None:
+        for st in self.build_stretches():
+            if st.cls != ROAD or any(self.ref[w] for w in st.ways):
+                continue
+            if st.length > self.opt.connector_max_length_m:
+                continue
+            ins, _ = self._classes_at(st.start)
+            _, outs = self._classes_at(st.end)
+            road_outs_at_start = [s for s in self.succ[st.start] if self.seg_cls(st.start, s) == ROAD]
+            road_ins_at_end = [p for p in self.pred[st.end] if self.seg_cls(p, st.end) == ROAD]
+            fed_by_links = ins == {LINK}
+            feeds_links = outs == {LINK}
+            fork = len(road_outs_at_start) > 1 or len(road_ins_at_end) > 1
+            if fed_by_links or feeds_links or fork:
+                for w in st.ways:
+                    if self.cls[w] == ROAD:
+                        self.cls[w] = LINK
+                why = "fed by links" if fed_by_links else "feeding links" if feeds_links else "forking"
+                self.quirk(f"way(s) {', '.join(map(str, st.ways))}: tagged motorway without ref, "
+                           f"{st.length:.0f} m, {why}: treated as motorway_link")
+
+    # -- 4. pruning -------------------------------------------------------
+    def prune_links(self) -> None:
+        on_road = {n for (a, b), w in self.seg.items() if self.cls[w] == ROAD for n in (a, b)}
+        link = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == LINK]
+        fwd_adj, bwd_adj = defaultdict(list), defaultdict(list)
+        for a, b in link:
+            fwd_adj[a].append(b)
+            bwd_adj[b].append(a)
+
+        def reach(adj):
+            seen, stack = set(on_road), list(on_road)
+            while stack:
+                for m in adj[stack.pop()]:
+                    if m not in seen:
+                        seen.add(m)
+                        stack.append(m)
+            return seen
+
+        fwd, bwd = reach(fwd_adj), reach(bwd_adj)
+        dropped = sorted({self.seg[(a, b)] for a, b in link if not (a in fwd and b in bwd)})
+        for a, b in link:
+            if not (a in fwd and b in bwd):
+                self._remove_seg(a, b)
+        for w in dropped:
+            self.ignored.setdefault(w, "exit to an ordinary road or cut at the extract edge")
+        if dropped:
+            self.quirk(f"link way(s) {', '.join(map(str, dropped))} not between carriageways "
+                       "(exits to ordinary roads or cut at the extract edge): ignored")
+
+
+# -- roads, labels, interchanges ------------------------------------------------
+
+@dataclass
+class _RoadGroup:
+    """A one-way carriageway: a chain of road stretches."""
+
+    gid: int
+    stretches: list[int]
+    xy: np.ndarray
+    s_of: dict[int, float]
+    corridor: str | None
+    ways: list[int]
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = float(np.hypot(*v))
+    return v / n if n > 0 else v
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> float:
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
+class _Builder:
+    def __init__(self, nw: _Network):
+        self.nw = nw
+        self.st = nw.build_stretches()
+        self.ends: dict[int, list[_Stretch]] = defaultdict(list)
+        self.starts: dict[int, list[_Stretch]] = defaultdict(list)
+        for s in self.st:
+            self.ends[s.end].append(s)
+            self.starts[s.start].append(s)
+        self.groups: list[_RoadGroup] = []
+        self.group_of: dict[int, int] = {}
+        self._group_roads()
+
+    # -- carriageways -----------------------------------------------------
+    def _stretch_ref(self, s: _Stretch) -> str | None:
+        refs = [self.nw.ref[w] for w in s.ways if self.nw.ref[w]]
+        return refs[0] if refs else None
+
+    def _group_roads(self) -> None:
+        nxt: dict[int, int] = {}
+        prv: dict[int, int] = {}
+        nodes = sorted(set(self.ends) | set(self.starts))
+        for n in nodes:
+            ins = [s for s in self.ends[n] if s.cls == ROAD]
+            outs = [s for s in self.starts[n] if s.cls == ROAD]
+            for i in ins:
+                cands = [o for o in outs if o.idx not in prv]
+                same = [o for o in cands if self._stretch_ref(o) == self._stretch_ref(i)
+                        or self._stretch_ref(o) is None or self._stretch_ref(i) is None]
+                if len(ins) == 1 and len(outs) == 1:
+                    same = cands
+                if not same:
+                    continue
+                d_in = _unit(i.xy[-1] - i.xy[-2])
+                best = max(same, key=lambda o: float(np.dot(d_in, _unit(o.xy[1] - o.xy[0]))))
+                nxt[i.idx], prv[best.idx] = best.idx, i.idx
+            if len(outs) > 1 or len(ins) > 1:
+                unpaired = [s.idx for s in outs if s.idx not in prv] + [s.idx for s in ins if s.idx not in nxt]
+                if unpaired:
+                    self.nw.quirk(f"node {n}: carriageways meet without a link (stretches {unpaired})")
+        seen: set[int] = set()
+        road_idx = [s.idx for s in self.st if s.cls == ROAD]
+        heads = [i for i in road_idx if i not in prv] + road_idx  # cycles last
+        for h in heads:
+            if h in seen:
+                continue
+            chain, cur = [], h
+            while cur is not None and cur not in seen:
+                seen.add(cur)
+                chain.append(cur)
+                cur = nxt.get(cur)
+            xy = np.concatenate([self.st[chain[0]].xy] + [self.st[c].xy[1:] for c in chain[1:]])
+            nodes = self.st[chain[0]].nodes + [n for c in chain[1:] for n in self.st[c].nodes[1:]]
+            cum = arclength(xy)
+            s_of = {n: float(s) for n, s in zip(nodes, cum)}
+            lengths = Counter()
+            ways = []
+            for c in chain:
+                st = self.st[c]
+                for w in st.ways:
+                    ways.append(w)
+                    if self.nw.ref[w]:
+                        lengths[self.nw.ref[w]] += st.length / len(st.ways)
+            corridor = lengths.most_common(1)[0][0] if lengths else None
+            g = _RoadGroup(len(self.groups), chain, xy, s_of, corridor, list(dict.fromkeys(ways)))
+            self.groups.append(g)
+            for c in chain:
+                self.group_of[c] = g.gid
+        self._fill_missing_refs()
+
+    def _fill_missing_refs(self) -> None:
+        for g in self.groups:
+            if g.corridor is not None:
+                continue
+            heading = _unit(g.xy[-1] - g.xy[0])
+            best, best_d = None, 150.0
+            for h in self.groups:
+                if h.corridor is None or float(np.dot(heading, _unit(h.xy[-1] - h.xy[0]))) > -0.5:
+                    continue
+                d, _ = segment_distances(g.xy[len(g.xy) // 2], h.xy[:-1], h.xy[1:])
+                if d.min() < best_d:
+                    best, best_d = h, float(d.min())
+            if best is not None:
+                g.corridor = best.corridor
+                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: ref {best.corridor} "
+                              f"from the opposite carriageway {best_d:.0f} m away")
+            else:
+                g.corridor = f"way{min(g.ways)}"
+                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: corridor named {g.corridor}")
+
+    # -- junction labels ----------------------------------------------------
+    def _probe_out(self, s: _Stretch) -> np.ndarray:
+        return point_at(s.xy, min(_PROBE_M, 0.5 * s.length))
+
+    def _probe_in(self, s: _Stretch) -> np.ndarray:
+        return point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length))
+
+    def junction_edges(self, n: int) -> list[tuple[tuple[str, int], tuple[str, int], Label, int]]:
+        """Edges (source key, target key, label, junction node) at node ``n``."""
+        ins, outs = self.ends[n], self.starts[n]
+        ri = [s for s in ins if s.cls == ROAD]
+        ro = [s for s in outs if s.cls == ROAD]
+        li = [s for s in ins if s.cls == LINK]
+        lo = [s for s in outs if s.cls == LINK]
+        if not li and not lo:
+            return []
+        p = self.nw.xy[n]
+        edges = []
+
+        def lateral_out(d_ref, s):
+            return _cross(d_ref, _unit(self._probe_out(s) - p))
+
+        def lateral_in(d_ref, s):
+            return _cross(d_ref, _unit(self._probe_in(s) - p))
+
+        through = [(i, o) for i in ri for o in ro if self.group_of[i.idx] == self.group_of[o.idx]]
+        if through:
+            i, o = through[0]
+            g = ("road", self.group_of[i.idx])
+            d_out = _unit(p - self._probe_in(i))
+            d_in = _unit(self._probe_out(o) - p)
+            ref_out, ref_in = lateral_out(d_out, o), lateral_in(d_in, i)
+            for s in lo:
+                side = "left" if lateral_out(d_out, s) > ref_out else "right"
+                edges.append((g, ("ramp", s.idx), Label.of(True, side), n))
+            for s in li:
+                side = "left" if lateral_in(d_in, s) > ref_in else "right"
+                edges.append((("ramp", s.idx), g, Label.of(False, side), n))
+            return edges
+        if ri and lo:
+            g = ("road", self.group_of[ri[0].idx])
+            d_out = _unit(p - self._probe_in(ri[0]))
+            ranked = sorted(lo, key=lambda s: -lateral_out(d_out, s))
+            for k, s in enumerate(ranked):
+                edges.append((g, ("ramp", s.idx), Label.OUT_M if k == 0 else Label.OUT_R, n))
+        if ro and li:
+            g = ("road", self.group_of[ro[0].idx])
+            d_in = _unit(self._probe_out(ro[0]) - p)
+            ranked = sorted(li, key=lambda s: -lateral_in(d_in, s))
+            for k, s in enumerate(ranked):
+                edges.append((("ramp", s.idx), g, Label.IN_M if k == 0 else Label.IN_R, n))
+        if ro and lo and not ri:  # carriageway cut at the extract edge right at a diverge
+            g = ("road", self.group_of[ro[0].idx])
+            d_out = _unit(self._probe_out(ro[0]) - p)
+            for s in lo:
+                side = "left" if lateral_out(d_out, s) > lateral_out(d_out, ro[0]) else "right"
+                edges.append((g, ("ramp", s.idx), Label.of(True, side), n))
+            self.nw.quirk(f"node {n}: carriageway begins at the extract edge where a link leaves it")
+        if ri and li and not ro:  # carriageway cut at the extract edge right at a merge
+            g = ("road", self.group_of[ri[0].idx])
+            d_in = _unit(p - self._probe_in(ri[0]))
+            for s in li:
+                side = "left" if lateral_in(d_in, s) > lateral_in(d_in, ri[0]) else "right"
+                edges.append((("ramp", s.idx), g, Label.of(False, side), n))
+            self.nw.quirk(f"node {n}: carriageway ends at the extract edge where a link joins it")
+        if ri or ro:
+            return edges
+        # links only: splits, merges, or both (through a junction ramp)
+        if len(li) == 1 and len(lo) == 1:
+            return [(("ramp", li[0].idx), ("ramp", lo[0].idx), Label.OUT_M, n)]  # not expected
+        parent = ("ramp", li[0].idx) if len(li) == 1 else ("junction", n)
+        child = ("ramp", lo[0].idx) if len(lo) == 1 else ("junction", n)
+        if len(lo) >= 2:
+            base = li[0] if len(li) == 1 else None
+            d_out = _unit(p - self._probe_in(base)) if base is not None else \
+                _unit(np.mean([_unit(self._probe_out(s) - p) for s in lo], axis=0))
+            ranked = sorted(lo, key=lambda s: -lateral_out(d_out, s))
+            for k, s in enumerate(ranked):
+                edges.append((parent, ("ramp", s.idx), Label.OUT_L if k == 0 else Label.OUT_R, n))
+        if len(li) >= 2:
+            base = lo[0] if len(lo) == 1 else None
+            d_in = _unit(self._probe_out(base) - p) if base is not None else \
+                _unit(np.mean([_unit(p - self._probe_in(s)) for s in li], axis=0))
+            ranked = sorted(li, key=lambda s: -lateral_in(d_in, s))
+            for k, s in enumerate(ranked):
+                edges.append((("ramp", s.idx), child, Label.IN_L if k == 0 else Label.IN_R, n))
+        if len(li) >= 2 and len(lo) >= 2:
+            self.nw.quirk(f"node {n}: links merge and split at one point: a junction ramp is added")
+        return edges
+
+
+def _components(keys: list, pairs: list[tuple]) -> list[list]:
+    parent = {k: k for k in keys}
+
+    def find(k):
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    for a, b in pairs:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb, key=str)] = min(ra, rb, key=str)
+    out = defaultdict(list)
+    for k in keys:
+        out[find(k)].append(k)
+    return [sorted(v, key=str) for _, v in sorted(out.items(), key=lambda kv: str(kv[0]))]
+
+
+def _stem_merges(nw: _Network, b: _Builder, edges: list) -> list:
+    """Links merging onto a trumpet stem that OSM tags as the carriageway (see ``stem_length_m``)."""
+    out = list(edges)
+    for src, dst, label, n0 in edges:
+        if label is not Label.IN_M:
+            continue
+        grp = b.groups[dst[1]]
+        s0 = grp.s_of[n0]
+        diverges = [grp.s_of[e[3]] for e in edges if e[0] == dst and e[2].is_out]
+        for k, e in enumerate(out):
+            if e[1] != dst or e[2] in (Label.IN_M,) or e[3] == n0:
+                continue
+            ds = grp.s_of[e[3]] - s0
+            if 0 < ds <= nw.opt.stem_length_m and not any(s0 < s <= grp.s_of[e[3]] for s in diverges):
+                out[k] = (e[0], src, e[2], e[3])
+                nw.quirk(f"node {e[3]}: link merges {ds:.0f} m after the carriageway began from a link "
+                         "(node {n0}): merged into that ramp (trumpet stem)".replace("{n0}", str(n0)))
+    return out
+
+
+def _compact(ref: str) -> str:
+    return "".join(ch for ch in ref.replace(";", "-") if ch.isalnum() or ch == "-")
+
+
+def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
+    """Every motorway-to-motorway interchange of ``net`` as a topology.
+
+    An interchange that breaks a model rule is logged and left out; the
+    others are still returned.
+    """
+    nw = _Network(net, options)
+    nw.add_ways()
+    nw.snap_dangling_links()
+    nw.reclassify_connectors()
+    if not options.keep_exits:
+        nw.prune_links()
+    b = _Builder(nw)
+    edges = [e for n in sorted(set(b.ends) | set(b.starts)) for e in b.junction_edges(n)]
+    edges = _stem_merges(nw, b, edges)
+    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] != "road"}, key=str)
+    pairs = [(e[0], e[1]) for e in edges if e[0][0] != "road" and e[1][0] != "road"]
+    comps = _components(ramp_keys, pairs)
+    comp_of = {k: ci for ci, comp in enumerate(comps) for k in comp}
+    comp_edges: dict[int, list] = defaultdict(list)
+    for e in edges:
+        k = e[0] if e[0][0] != "road" else e[1]
+        comp_edges[comp_of[k]].append(e)
+
+    def corridors(ci):
+        return {b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
+
+    def points(ci):
+        return np.array([nw.xy[e[3]] for e in comp_edges[ci]] +
+                        [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
+
+    multi = [ci for ci in range(len(comps)) if len(corridors(ci)) >= 2]
+    for ci in range(len(comps)):
+        if ci not in multi:
+            ways = sorted({w for k in comps[ci] if k[0] == "ramp" for w in b.st[k[1]].ways})
+            for w in ways:
+                nw.ignored.setdefault(w, f"joins only corridor {sorted(map(str, corridors(ci)))}")
+            nw.quirk(f"link way(s) {ways} join only corridor {sorted(map(str, corridors(ci)))}: "
+                     "not a motorway-to-motorway interchange")
+    close = []
+    for x, ci in enumerate(multi):
+        for cj in multi[x + 1:]:
+            if len(corridors(ci) & corridors(cj)) < 2:
+                continue
+            pi, pj = points(ci), points(cj)
+            d = np.sqrt(((pi[:, None, :] - pj[None, :, :]) ** 2).sum(-1)).min()
+            if d <= options.cluster_distance_m:
+                close.append((ci, cj))
+    clusters = _components(multi, close)
+    out = []
+    for cl in clusters:
+        cl_edges = [e for ci in cl for e in comp_edges[ci]]
+        try:
+            out.append(_topology(nw, b, cl_edges))
+        except TopologyError as exc:
+            exc.located(nw.src)
+            log.warning("interchange rejected: %s", exc.one_line())
+    names = Counter(t.name for t in out)
+    for t in out:
+        if names[t.name] > 1:
+            log.warning("%s: duplicate interchange name %s", nw.src, t.name)
+    return sorted(out, key=lambda t: t.name)
+
+
+def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
+    net = nw.net
+    road_gids = sorted({k[1] for e in edges for k in e[:2] if k[0] == "road"})
+    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] != "road"},
+                       key=lambda k: (min(b.st[k[1]].ways) if k[0] == "ramp" else 0, k[1]))
+    junction_nodes = sorted({e[3] for e in edges})
+    corridors = sorted({b.groups[g].corridor for g in road_gids})
+    first_node = min((n for n in junction_nodes if n > 0), default=abs(min(junction_nodes)))
+    name = "_".join(_compact(c) for c in corridors) + f"_{first_node}"
+
+    # roads: window along each carriageway, heading, expressway pairing
+    window, heading = {}, {}
+    for g in road_gids:
+        grp = b.groups[g]
+        s = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
+        total = float(arclength(grp.xy)[-1])
+        lo, hi = max(0.0, min(s) - 300.0), min(total, max(s) + 300.0)
+        window[g] = (lo, hi)
+        heading[g] = _unit(point_at(grp.xy, hi) - point_at(grp.xy, lo))
+    exp_of: dict[int, str] = {}
+    for c in corridors:
+        gs = [g for g in road_gids if b.groups[g].corridor == c]
+        pairs_left, k = list(gs), 0
+        while pairs_left:
+            g = pairs_left.pop(0)
+            partner = min((h for h in pairs_left if float(np.dot(heading[g], heading[h])) < -0.3),
+                          key=lambda h: float(np.dot(heading[g], heading[h])), default=None)
+            exp = _compact(c) + ("" if k == 0 else chr(ord("a") + k))
+            exp_of[g] = exp
+            if partner is not None:
+                pairs_left.remove(partner)
+                exp_of[partner] = exp
+            elif len(gs) > 1:
+                nw.quirk(f"{name}: carriageway of {c} without an opposite partner: expressway {exp}")
+            k += 1
+    road_id: dict[int, str] = {}
+    for g in road_gids:
+        base = exp_of[g] + bearing_letter(heading[g])
+        rid, k = base, 2
+        while rid in road_id.values():
+            rid, k = f"{base}{k}", k + 1
+        road_id[g] = rid
+    ramp_id = {k: f"r{i + 1}" for i, k in enumerate(ramp_keys)}
+
+    def nid(k):
+        return road_id[k[1]] if k[0] == "road" else ramp_id[k]
+
+    def lanes_of(ways):
+        vals = [net.ways[w].tag("lanes") for w in ways]
+        vals = [int(v) for v in vals if v and v.isdigit() and int(v) > 0]
+        return Counter(vals).most_common(1)[0][0] if vals else None
+
+    conns = []
+    for src, dst, label, n in edges:
+        pos = None
+        road = src if src[0] == "road" else dst if dst[0] == "road" else None
+        if road is not None:
+            lo, hi = window[road[1]]
+            pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
+        conns.append(Connection(nid(src), nid(dst), label, pos))
+    roads, node_attrs, lines = [], {}, {}
+    for g in road_gids:
+        grp = b.groups[g]
+        lo, hi = window[g]
+        cum = arclength(grp.xy)
+        inside = (cum >= lo) & (cum <= hi)
+        ways_in = list(dict.fromkeys(w for c in grp.stretches for w in b.st[c].ways
+                                     if lo <= grp.s_of[b.st[c].end] and grp.s_of[b.st[c].start] <= hi))
+        roads.append(Road(road_id[g], exp_of[g], lanes_of(ways_in)))
+        node_attrs[road_id[g]] = {"osm_ways": " ".join(map(str, ways_in)), "ref": grp.corridor}
+        lines[road_id[g]] = grp.xy[inside].tolist()
+    ramps = []
+    for k in ramp_keys:
+        rid = ramp_id[k]
+        ramps.append(Ramp(rid))
+        if k[0] != "ramp":
+            node_attrs[rid] = {"length_m": 0.0, "min_radius_m": float("inf"), "osm_ways": ""}
+            lines[rid] = [nw.xy[k[1]].tolist()]
+            continue
+        st = b.st[k[1]]
+        attrs = {"length_m": round(st.length, 1), "min_radius_m": round(min_radius(st.xy), 1),
+                 "osm_ways": " ".join(map(str, st.ways))}
+        ele = net.elevation
+        if st.start in ele and st.end in ele and st.length > 0:
+            attrs["grade_pct"] = round(100.0 * (ele[st.end] - ele[st.start]) / st.length, 2)
+        lanes = lanes_of(st.ways)
+        if lanes:
+            attrs["lanes"] = lanes
+        node_attrs[rid] = attrs
+        lines[rid] = st.xy.tolist()
+    osm = {
+        "origin": (nw.proj.lat0, nw.proj.lon0),
+        "lines": lines,
+        "junctions": [(nw.xy[n].tolist(), nid(src), nid(dst), label.value) for src, dst, label, n in edges],
+        "quirks": list(nw.quirks),
+        "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
+    }
+    return Topology.build(name, roads, ramps, conns, source=nw.src, node_attrs=node_attrs,
+                          attrs={"format": "osm", "osm": osm, "osm_nodes": junction_nodes})
