@@ -125,6 +125,7 @@ class _Network:
         self.net = net
         self.quirks: list[str] = []
         self.ignored: dict[int, str] = {}  # link way id -> why it is in no interchange
+        self.snapped: dict[int, float] = {}  # carriageway node a link was snapped to -> gap (m)
         lat = np.array([c[0] for c in net.coords.values()]) if net.coords else np.zeros(1)
         lon = np.array([c[1] for c in net.coords.values()]) if net.coords else np.zeros(1)
         self.proj = LocalProjection(float(lat.mean()), float(lon.mean()))
@@ -227,6 +228,7 @@ class _Network:
                 self._add_chain(wid_road, [a, v, b])
             wid_link = self.seg[(self.pred[n][0], n)] if self.pred[n] else self.seg[(n, self.succ[n][0])]
             self._add_chain(wid_link, [n, v] if self.pred[n] else [v, n])
+            self.snapped[v] = float(d[k])
             end = "end" if self.pred[n] and self.succ[n] == [v] else "start"
             self.quirk(f"way {wid_link}: link {end} (node {n}) is {d[k]:.1f} m short of carriageway "
                        f"way {wid_road}: snapped", logging.WARNING)
@@ -421,9 +423,13 @@ class _Builder:
 
     # -- junction labels ----------------------------------------------------
     def _probe_out(self, s: _Stretch) -> np.ndarray:
+        if s.start in self.nw.snapped and len(s.xy) > 1:
+            return s.xy[1]  # the link's real start: which side of the carriageway it lies on
         return point_at(s.xy, min(_PROBE_M, 0.5 * s.length))
 
     def _probe_in(self, s: _Stretch) -> np.ndarray:
+        if s.end in self.nw.snapped and len(s.xy) > 1:
+            return s.xy[-2]
         return point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length))
 
     def junction_edges(self, n: int) -> list[tuple[tuple[str, int], tuple[str, int], Label, int]]:
@@ -697,8 +703,12 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             lines[rid] = [nw.xy[k[1]].tolist()]
             continue
         st = b.st[k[1]]
-        attrs = {"length_m": round(st.length, 1), "min_radius_m": round(min_radius(st.xy), 1),
+        real = st.xy[(1 if st.start in nw.snapped else 0):(-1 if st.end in nw.snapped else None)]
+        attrs = {"length_m": round(float(arclength(real)[-1]), 1), "min_radius_m": round(min_radius(real), 1),
                  "osm_ways": " ".join(map(str, st.ways))}
+        gap = sum(nw.snapped.get(x, 0.0) for x in (st.start, st.end))
+        if gap:
+            attrs["snapped_m"] = round(gap, 1)
         ele = net.elevation
         if st.start in ele and st.end in ele and st.length > 0:
             attrs["grade_pct"] = round(100.0 * (ele[st.end] - ele[st.start]) / st.length, 2)
