@@ -137,6 +137,7 @@ def parse_result(path: str | os.PathLike) -> list[CheckerOutcome]:
         issues = []
         for iss in ch.iter("Issue"):
             where = [loc.get("xpath") for loc in iss.iter("XMLLocation")]
+            where += [f"line {loc.get('row')}" for loc in iss.iter("FileLocation")]
             where += [f"({loc.get('x')}, {loc.get('y')}, {loc.get('z')})"
                       for loc in iss.iter("InertialLocation")]
             issues.append(CheckerIssue(ch.get("checkerId"), _LEVELS.get(iss.get("level"), iss.get("level")),

@@ -140,16 +140,21 @@ def validate_xodr(path: str | os.PathLike, *, geometry: InterchangeGeometry | No
             outcomes = qc.run_asam_checker(path)
             issues = [i for o in outcomes for i in o.issues]
             errored = [o.checker_id for o in outcomes if o.status == "error"]
-            skipped = [o.checker_id for o in outcomes if o.status == "skipped"]
+            by_version = [o.checker_id for o in outcomes
+                          if o.status == "skipped" and o.summary.startswith("Version")]
+            skipped = [o.checker_id for o in outcomes
+                       if o.status == "skipped" and o.checker_id not in by_version]
             done = sum(o.status == "completed" for o in outcomes)
             detail = f"{done}/{len(outcomes)} checkers completed, {len(issues)} issues"
+            if by_version:
+                detail += "; not applicable to this version: " + ", ".join(by_version)
             if skipped:
-                detail += "; skipped (not applicable to this version): " + ", ".join(skipped)
+                detail += f"; {len(skipped)} skipped on failed preconditions"
             if errored:
                 detail += "; errors in: " + ", ".join(errored)
             for i in issues[:3]:
                 detail += f"; {i.checker_id}: {i.description} at {i.where[:160]}"
-            results.append(CheckResult("asam_qc", not issues and not errored, detail))
+            results.append(CheckResult("asam_qc", not (issues or errored or skipped), detail))
         except (FlyoverError, OSError) as exc:
             results.append(CheckResult("asam_qc", False, str(exc)))
     try:

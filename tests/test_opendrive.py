@@ -1,0 +1,182 @@
+"""OpenDRIVE export and validation on small generated interchanges (loop, flyover, T)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from lxml import etree
+
+from flyover.opendrive.continuity import check_continuity
+from flyover.opendrive.reader import read_xodr
+from flyover.opendrive.samples import SAMPLES, sample_geometry
+from flyover.opendrive.validate import movements, xsd_errors
+from flyover.opendrive.writer import ExportError, xodr_bytes
+
+
+@pytest.fixture(scope="module")
+def xodrs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("xodr")
+    out = {}
+    for kind in SAMPLES:
+        path = root / f"{kind}.xodr"
+        path.write_bytes(xodr_bytes(sample_geometry(kind)))
+        out[kind] = path
+    return out
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_written_file_is_valid_against_the_asam_xsd(xodrs, kind):
+    net = read_xodr(xodrs[kind])
+    assert net.version == (1, 7)
+    assert xsd_errors(xodrs[kind], net.version) == []
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_every_road_is_named_after_its_topology_element(xodrs, kind):
+    g = sample_geometry(kind)
+    names = {r.name for r in read_xodr(xodrs[kind]).roads.values()}
+    assert names == {r.id for r in g.roads} | {r.id for r in g.ramps}
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_roads_are_lines_and_ramps_are_normalized_parampoly3(xodrs, kind):
+    doc = etree.parse(str(xodrs[kind]))
+    ramps = {r.id for r in sample_geometry(kind).ramps}
+    for road in doc.iter("road"):
+        kinds = {g[0].tag for g in road.iter("geometry")}
+        assert kinds == ({"paramPoly3"} if road.get("name") in ramps else {"line"})
+    assert {p.get("pRange") for p in doc.iter("paramPoly3")} == {"normalized"}
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_links_agree_both_ways(xodrs, kind):
+    net = read_xodr(xodrs[kind])
+    for r in net.roads.values():
+        for mine, end in (("successor", "end"), ("predecessor", "start")):
+            link = getattr(r, mine)
+            if link is None or link[0] != "road":
+                continue
+            other = net.roads[link[1]]
+            back = getattr(other, "predecessor" if link[2] == "start" else "successor")
+            if other.junction != "-1" and r.junction == "-1":
+                # incoming road -> connecting road is listed in the junction
+                assert any(c.connecting == other.id and c.incoming == r.id
+                           for c in net.junctions[other.junction].connections)
+            elif r.junction != "-1" and other.junction == "-1":
+                assert back is not None and back[:2] == ("junction", r.junction)
+            else:
+                assert back is not None and back[1] == r.id and back[2] == end
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_elevation_matches_the_geometry_within_1cm(xodrs, kind):
+    g = sample_geometry(kind)
+    net = read_xodr(xodrs[kind])
+    for ramp in g.ramps:
+        pieces = sorted((r for r in net.roads.values() if r.name == ramp.id),
+                        key=lambda r: r.reference(0.0)[0][0] * 0 + _start_s(net, r, ramp.id))
+        s_total = 0.0
+        for r in pieces:
+            s = np.linspace(0.0, r.length, 7)
+            z = r.reference(s)[2]
+            expect = [_geom_z(ramp, s_total + si) for si in s]
+            assert np.allclose(z, expect, atol=0.01)
+            s_total += r.length
+
+
+def _geom_z(ramp, s):
+    rec = [e for e in ramp.elevation if e.s_m <= s + 1e-9][-1]
+    ds = s - rec.s_m
+    return rec.a + rec.b * ds + rec.c * ds ** 2 + rec.d * ds ** 3
+
+
+def _start_s(net, road, name):
+    """Position of a piece along its element: count predecessors with the same name."""
+    n, r = 0, road
+    while r.predecessor is not None:
+        if r.predecessor[0] == "road":
+            prev = net.roads[r.predecessor[1]]
+        else:
+            j = net.junctions[r.predecessor[1]]
+            prev = next((net.roads[c.connecting] for c in j.connections
+                         if net.roads[c.connecting].name == name
+                         and net.roads[c.connecting].successor[1] == r.id), None)
+            if prev is None:
+                break
+        if prev.name != name:
+            break
+        n, r = n + 1, prev
+    return n
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_lane_ends_meet_in_3d_at_every_link(xodrs, kind):
+    ok, detail = check_continuity(read_xodr(xodrs[kind]))
+    assert ok, detail
+
+
+def test_continuity_check_catches_a_gap(xodrs, tmp_path):
+    doc = etree.parse(str(xodrs["loop"]))
+    geo = next(r for r in doc.iter("road") if r.get("name") == "r1").find("planView/geometry")
+    geo.set("x", repr(float(geo.get("x")) + 0.05))
+    bad = tmp_path / "bad.xodr"
+    doc.write(str(bad))
+    ok, detail = check_continuity(read_xodr(bad))
+    assert not ok
+    assert " 0 off" not in detail and "xy 0.05" in detail
+
+
+def test_continuity_check_catches_a_height_step(xodrs, tmp_path):
+    doc = etree.parse(str(xodrs["flyover"]))
+    road = next(r for r in doc.iter("road") if r.get("name") == "B1")
+    el = road.find("elevationProfile/elevation")
+    el.set("a", repr(float(el.get("a")) + 0.03))
+    bad = tmp_path / "step.xodr"
+    doc.write(str(bad))
+    ok, detail = check_continuity(read_xodr(bad))
+    assert not ok
+    assert "z 0.03" in detail
+
+
+def test_export_is_byte_reproducible():
+    g = sample_geometry("t")
+    assert xodr_bytes(g) == xodr_bytes(g)
+
+
+def test_header_has_bounds_and_documents_the_frame(xodrs):
+    head = etree.parse(str(xodrs["flyover"])).getroot().find("header")
+    assert float(head.get("north")) > float(head.get("south"))
+    assert float(head.get("east")) > float(head.get("west"))
+    frame = [u.get("value") for u in head.iter("userData") if u.get("code") == "flyover:frame"]
+    assert frame and "x east" in frame[0]
+
+
+def test_ramp_far_from_its_attachment_is_rejected_naming_it():
+    g = sample_geometry("loop")
+    ramp = g.ramps[0]
+    moved = type(ramp.start)(ramp.start.parent, ramp.start.label, ramp.start.s_m + 30.0,
+                             ramp.start.offset_m, ramp.start.heading_rad, ramp.start.z_m)
+    g2 = type(g)(g.class_id, g.sample, g.seed, g.lane_width_m, g.shoulder_width_m,
+                 g.ramp_lane_width_m, g.levels_m, g.roads,
+                 (type(ramp)(**{**ramp.__dict__, "start": moved}),))
+    with pytest.raises(ExportError, match="r1"):
+        xodr_bytes(g2)
+
+
+def test_movements_of_the_t_follow_ramps_downstream():
+    assert movements(sample_geometry("t")) == [("A1", "A1"), ("A2", "A2"), ("C1", "A1"), ("C1", "A2")]
+
+
+def test_movements_of_the_loop():
+    assert movements(sample_geometry("loop")) == [("A1", "A1"), ("A1", "B1"), ("B1", "B1")]
+
+
+def test_heading_is_direction_agnostic_in_continuity():
+    from flyover.opendrive.continuity import LinkGap
+
+    assert LinkGap("a", "b", 0.0, 0.0, 0.2).ok(0.01, 0.5)
+    assert not LinkGap("a", "b", 0.0, 0.02, 0.0).ok(0.01, 0.5)
+    assert not LinkGap("a", "b", 0.0, 0.0, 0.6).ok(0.01, 0.5)
+    assert LinkGap("a", "b", 0.0, 0.0, math.nan).ok(0.01, 0.5)

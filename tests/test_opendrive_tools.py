@@ -1,0 +1,78 @@
+"""The external tools for real: ASAM checker, netconvert, routing, the CLI, plan.png."""
+
+from __future__ import annotations
+
+import pytest
+
+from flyover.cli import main
+from flyover.geometry.model import write_geometry
+from flyover.opendrive import qc
+from flyover.opendrive.samples import SAMPLES, sample_geometry
+from flyover.opendrive.validate import CHECKS, validate_xodr
+from flyover.opendrive.writer import write_xodr
+
+pytestmark = pytest.mark.integration
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("built")
+    out = {}
+    for kind in SAMPLES:
+        d = root / kind
+        write_geometry(sample_geometry(kind), d / "geometry.json")
+        write_xodr(sample_geometry(kind), d / "interchange.xodr")
+        out[kind] = d
+    return out
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_asam_checker_reports_zero_issues_and_skips_only_by_version(built, kind):
+    outcomes = qc.run_asam_checker(built[kind] / "interchange.xodr")
+    assert len(outcomes) >= 20
+    assert [i for o in outcomes for i in o.issues] == []
+    assert all(o.status in ("completed", "skipped") for o in outcomes)
+    skipped = [o for o in outcomes if o.status == "skipped"]
+    assert all(o.summary.startswith("Version") for o in skipped)
+    assert len(skipped) <= 1
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_every_check_passes_and_every_movement_routes(built, kind):
+    results, times, _ = validate_xodr(built[kind] / "interchange.xodr",
+                                      geometry=sample_geometry(kind),
+                                      net_out=built[kind] / "interchange.net.xml")
+    assert [r.check for r in results] == list(CHECKS)
+    assert all(r.ok for r in results), [r for r in results if not r.ok]
+    assert (built[kind] / "interchange.net.xml").stat().st_size > 0
+    assert "movements routable" in results[-1].detail
+    assert times["netconvert"] > 0
+
+
+def test_asam_checker_flags_a_schema_violation(tmp_path):
+    bad = tmp_path / "bad.xodr"
+    bad.write_text('<OpenDRIVE><header revMajor="1" revMinor="7"/><road id="1" length="10">'
+                   '<planView><geometry s="0" x="0" y="0" hdg="0" length="10"><line/></geometry>'
+                   '</planView><lanes><laneSection s="0"><center><lane id="0" type="none"/></center>'
+                   '</laneSection></lanes></road></OpenDRIVE>')
+    outcomes = qc.run_asam_checker(bad)
+    schema = next(o for o in outcomes if o.checker_id.endswith("valid_schema"))
+    assert schema.issues
+
+
+def test_cli_validate_reports_and_exits_nonzero_on_failure(built, tmp_path, capsys):
+    assert main(["validate", str(built["t"] / "interchange.xodr")]) == 0
+    out = capsys.readouterr().out
+    assert "OK (5/5 checks)" in out and "movements routable" in out
+    bad = tmp_path / "broken.xodr"
+    bad.write_text("<OpenDRIVE><header/>")
+    assert main(["validate", "--no-qc", str(bad)]) == 1
+    assert "FAIL" in capsys.readouterr().out
+
+
+def test_cli_export_writes_xodr_and_plan(built, tmp_path):
+    png = tmp_path / "plan.png"
+    assert main(["export", str(built["loop"] / "geometry.json"), "-o", str(tmp_path / "x.xodr"),
+                 "--plan", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (tmp_path / "x.xodr").read_bytes() == (built["loop"] / "interchange.xodr").read_bytes()
