@@ -77,5 +77,11 @@ def plot_osm_topology(topology: Topology, path: str | os.PathLike, title: str | 
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.tick_params(labelsize=7)
     fig.tight_layout()
-    fig.savefig(path, metadata={"Software": None})
+    import io
+
+    from flyover.topology.io import atomic_write
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
     plt.close(fig)
+    atomic_write(path, buf.getvalue())

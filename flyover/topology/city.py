@@ -56,6 +56,9 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
                 continue
             target = outdir / f"{t.name}.graphml"
             write_graphml(t, target)
+            if "osm" in t.attrs:  # OSM import: its geometry picture beside the GraphML
+                from flyover.osm.plot import plot_osm_topology  # noqa: PLC0415 (optional stage)
+                plot_osm_topology(t, outdir / f"{t.name}.png")
             interchanges.append({"city": city, "interchange": t.name, "source_file": path,
                                  "graphml": str(target)})
             log.info("%s: %s", path, t.summary())
