@@ -170,15 +170,25 @@ class _Network:
                 continue
             self._add_chain(wid, nodes)
         for wid, nodes in undecided:
-            a, b = nodes[0], nodes[-1]
-            fwd = (len(self.pred[a]) > 0 and not self.succ[a]) + (len(self.succ[b]) > 0 and not self.pred[b])
-            rev = (len(self.pred[b]) > 0 and not self.succ[b]) + (len(self.succ[a]) > 0 and not self.pred[a])
-            if rev > fwd:
+            # orient like the traffic it meets: a link leaves and joins roughly along its neighbours
+            align = self._flow_alignment(nodes[0], nodes[0], nodes[1]) + \
+                self._flow_alignment(nodes[-1], nodes[-2], nodes[-1])
+            if align < 0:
                 nodes = nodes[::-1]
             self.quirk(f"way {wid}: link tagged oneway=no, taken as one-way "
-                       f"{'against' if rev > fwd else 'along'} its digitised direction "
-                       f"(neighbour flow {max(fwd, rev)}:{min(fwd, rev)})")
+                       f"{'against' if align < 0 else 'along'} its digitised direction "
+                       f"(alignment with neighbouring traffic {abs(align):.2f})")
             self._add_chain(wid, nodes)
+
+    def _flow_alignment(self, end: int, a: int, b: int) -> float:
+        """Cosine between the link's digitised direction ``a → b`` at ``end`` and the
+        one-way traffic already there: +1 along, -1 against, 0 if none."""
+        flows = [self.xy[end] - self.xy[p] for p in self.pred[end]] + \
+                [self.xy[q] - self.xy[end] for q in self.succ[end]]
+        if not flows:
+            return 0.0
+        mean = _unit(np.sum([_unit(f) for f in flows], axis=0))
+        return float(np.dot(mean, _unit(self.xy[b] - self.xy[a])))
 
     def _add_chain(self, wid: int, nodes: list[int]) -> None:
         for a, b in zip(nodes, nodes[1:]):
@@ -267,9 +277,13 @@ class _Network:
             _, outs = self._classes_at(st.end)
             road_outs_at_start = [s for s in self.succ[st.start] if self.seg_cls(st.start, s) == ROAD]
             road_ins_at_end = [p for p in self.pred[st.end] if self.seg_cls(p, st.end) == ROAD]
-            fed_by_links = ins == {LINK}
-            feeds_links = outs == {LINK}
-            fork = len(road_outs_at_start) > 1 or len(road_ins_at_end) > 1
+            joins_road = len(road_ins_at_end) > 1      # merges into another carriageway
+            leaves_road = len(road_outs_at_start) > 1  # diverges from another carriageway
+            fed_by_links = ins == {LINK} and (joins_road or outs == {LINK})
+            feeds_links = outs == {LINK} and leaves_road
+            others = [self.seg[(st.start, x)] for x in road_outs_at_start if x != st.nodes[1]] + \
+                [self.seg[(x, st.end)] for x in road_ins_at_end if x != st.nodes[-2]]
+            fork = (joins_road or leaves_road) and any(self.ref[w] for w in others)
             if fed_by_links or feeds_links or fork:
                 for w in st.ways:
                     if self.cls[w] == ROAD:
@@ -402,22 +416,33 @@ class _Builder:
         self._fill_missing_refs()
 
     def _fill_missing_refs(self) -> None:
+        self._pair_missing_refs(with_ref=True)
+        self._pair_missing_refs(with_ref=False)
+
+    def _pair_missing_refs(self, with_ref: bool) -> None:
+        """Give a carriageway without ref its opposite carriageway's ref (``with_ref``),
+        or else pair it with an opposite carriageway also without ref under a geometric name."""
         for g in self.groups:
             if g.corridor is not None:
                 continue
             heading = _unit(g.xy[-1] - g.xy[0])
             best, best_d = None, 150.0
             for h in self.groups:
-                if h.corridor is None or float(np.dot(heading, _unit(h.xy[-1] - h.xy[0]))) > -0.5:
+                if h is g or (h.corridor is None) == with_ref or \
+                        float(np.dot(heading, _unit(h.xy[-1] - h.xy[0]))) > -0.5:
                     continue
                 d, _ = segment_distances(g.xy[len(g.xy) // 2], h.xy[:-1], h.xy[1:])
                 if d.min() < best_d:
                     best, best_d = h, float(d.min())
-            if best is not None:
+            if best is not None and with_ref:
                 g.corridor = best.corridor
                 self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: ref {best.corridor} "
                               f"from the opposite carriageway {best_d:.0f} m away")
-            else:
+            elif best is not None:
+                g.corridor = best.corridor = f"way{min(g.ways + best.ways)}"
+                self.nw.quirk(f"carriageways way(s) {g.ways[:3]} and {best.ways[:3]} without ref, "
+                              f"opposite and {best_d:.0f} m apart: corridor named {g.corridor}")
+            elif not with_ref:
                 g.corridor = f"way{min(g.ways)}"
                 self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: corridor named {g.corridor}")
 

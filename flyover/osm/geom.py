@@ -45,7 +45,7 @@ def point_at(xy: np.ndarray, s: float) -> np.ndarray:
     return np.array([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
 
 
-def min_radius(xy: np.ndarray, step_m: float = 10.0, chord_steps: int = 2) -> float:
+def min_radius(xy: np.ndarray, step_m: float = 10.0, chord_steps: int = 3) -> float:
     """Smallest radius of curvature of a polyline, in metres (``inf`` if straight).
 
     The polyline is resampled every ``step_m`` and the circumradius of point
