@@ -106,3 +106,17 @@ def test_canonical_orders_pair_into_an_explicit_isomorphism():
         assert is_isomorphism(t, u, dict(zip(oa, ob)))
         # a wrong correspondence is caught
         assert not is_isomorphism(t, u, dict(zip(oa, ob[1:] + ob[:1])))
+
+
+def test_parallel_ramps_are_classified_without_blowup():
+    from flyover.topology import Connection, Ramp, Road
+
+    def parallel(k: int, names: list[str]) -> Topology:
+        roads = [Road("A1", "A"), Road("B1", "B")]
+        conns = [c for r in names for c in (Connection("A1", r, Label.OUT_R), Connection(r, "B1", Label.IN_R))]
+        return Topology.build(f"par{k}", roads, [Ramp(r) for r in names], conns)
+
+    a = parallel(9, [f"r{i}" for i in range(9)])
+    b = parallel(9, [f"x{8 - i}" for i in range(9)])
+    assert class_id(a) == class_id(b) != class_id(parallel(8, [f"r{i}" for i in range(8)]))
+    assert len(classify([a, b])) == 1

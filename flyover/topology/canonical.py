@@ -12,8 +12,9 @@ individualization–refinement, the method of nauty/bliss, in plain Python:
 3. every discrete leaf orders the nodes; its adjacency code is a candidate,
    and the smallest candidate is the canonical form.
 
-Topologies have tens of nodes and small automorphism groups, so the search
-tree stays small without automorphism pruning.
+Topologies have tens of nodes and small automorphism groups; the one common
+source of large groups, parallel ramps between the same parents (twins), is
+pruned, so the search tree stays small.
 """
 
 from __future__ import annotations
@@ -50,6 +51,22 @@ def _refine(colors: list[int], outs: list[list[tuple[int, int]]],
         n_classes = len(rank)
 
 
+def _untwinned(cell: list[int], outs, ins) -> list[int]:
+    """One node per group of twins (same labeled in- and out-neighbours).
+
+    Swapping two twins is an automorphism that fixes every other node, so
+    individualizing either gives the same leaves: branch on one only. This
+    keeps parallel ramps (k of them would cost k! leaves) cheap.
+    """
+    seen, keep = set(), []
+    for v in cell:
+        key = (frozenset(outs[v]), frozenset(ins[v]))
+        if key not in seen:
+            seen.add(key)
+            keep.append(v)
+    return keep
+
+
 def _search(colors, outs, ins, edges, best):
     n = len(colors)
     counts: dict[int, int] = {}
@@ -62,7 +79,7 @@ def _search(colors, outs, ins, edges, best):
             best[0], best[1] = code, colors
         return
     target = min(cells, key=lambda c: (counts[c], c))
-    for v in [v for v in range(n) if colors[v] == target]:
+    for v in _untwinned([v for v in range(n) if colors[v] == target], outs, ins):
         # individualize v: it sorts before the rest of its cell
         split = [2 * c + (0 if (u == v or c != target) else 1) for u, c in enumerate(colors)]
         _search(_refine(split, outs, ins), outs, ins, edges, best)
