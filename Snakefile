@@ -10,6 +10,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/topology.smk"
+include: "workflow/rules/export.smk"
 
 
 rule all:
@@ -17,4 +18,5 @@ rule all:
         "results/classes.parquet",
         "results/rejected.parquet",
         class_topology_outputs,
+        "results/validation.parquet",
     default_target: True

@@ -11,6 +11,7 @@ validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 1
+EXPORT_VERSION = 1
 
 
 wildcard_constraints:
@@ -60,3 +61,32 @@ def class_topology_outputs(wildcards):
         class_id=class_ids(),
         ext=["graphml", "png"],
     )
+
+
+# -- export (step 5) --
+
+def exported_interchanges():
+    """(class_id, sample) of every interchange to export.
+
+    Uses the geometry stage's `geometry_interchanges()` when its rules define
+    it; otherwise the geometry.json files already on disk.
+    """
+    if "geometry_interchanges" in globals():
+        return sorted(globals()["geometry_interchanges"]())
+    found = glob_wildcards("results/interchanges/{class_id}/{sample}/geometry.json")
+    return sorted(zip(found.class_id, found.sample))
+
+
+def validation_tables(wildcards):
+    return [
+        f"results/interchanges/{c}/{s}/validation.parquet"
+        for c, s in exported_interchanges()
+    ]
+
+
+def export_outputs(wildcards):
+    return [
+        f"results/interchanges/{c}/{s}/{name}"
+        for c, s in exported_interchanges()
+        for name in ("interchange.xodr", "interchange.net.xml", "plan.png")
+    ]

@@ -1,0 +1,73 @@
+# Step 5: geometry.json → OpenDRIVE (.xodr, plan.png) → SUMO network; validation table.
+rule export_xodr:
+    """One interchange: geometry.json → interchange.xodr (OpenDRIVE 1.7) and plan.png."""
+    input:
+        geometry="results/interchanges/{class_id}/{sample}/geometry.json",
+    output:
+        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
+        plan="results/interchanges/{class_id}/{sample}/plan.png",
+    log:
+        "logs/export/{class_id}/{sample}/xodr.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=EXPORT_VERSION,
+    benchmark:
+        "logs/benchmarks/export_xodr/{class_id}/{sample}.tsv"
+    script:
+        "../scripts/export_xodr.py"
+
+
+rule export_sumo:
+    """One interchange: interchange.xodr → interchange.net.xml (netconvert)."""
+    input:
+        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
+    output:
+        net="results/interchanges/{class_id}/{sample}/interchange.net.xml",
+    log:
+        "logs/export/{class_id}/{sample}/netconvert.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=EXPORT_VERSION,
+    benchmark:
+        "logs/benchmarks/export_sumo/{class_id}/{sample}.tsv"
+    script:
+        "../scripts/export_sumo.py"
+
+
+rule validate_interchange:
+    """One interchange: XSD, ASAM checker, 3D continuity, netconvert, routes."""
+    input:
+        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
+        geometry="results/interchanges/{class_id}/{sample}/geometry.json",
+    output:
+        table="results/interchanges/{class_id}/{sample}/validation.parquet",
+    log:
+        "logs/export/{class_id}/{sample}/validation.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=EXPORT_VERSION,
+        asam_qc=config["validation"]["asam_qc"],
+    benchmark:
+        "logs/benchmarks/validate/{class_id}/{sample}.tsv"
+    script:
+        "../scripts/export_validate.py"
+
+
+rule validation:
+    """All interchanges → results/validation.parquet."""
+    input:
+        tables=validation_tables,
+        exported=export_outputs,
+    output:
+        table="results/validation.parquet",
+    log:
+        "logs/validation.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=EXPORT_VERSION,
+    script:
+        "../scripts/export_validation_table.py"
