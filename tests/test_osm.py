@@ -377,3 +377,14 @@ def test_import_city_writes_graphml_and_picture(tmp_path):
     name = index["interchanges"][0]["interchange"]
     assert (tmp_path / "out" / f"{name}.graphml").exists() and (tmp_path / "out" / f"{name}.png").exists()
     assert nx.read_graphml(tmp_path / "out" / f"{name}.graphml").number_of_nodes() == 8
+
+
+def test_keep_exits_keeps_links_to_ordinary_roads(tmp_path):
+    exit_ramp = way([(15, -900), (40, -850), (120, -800)])
+    street = way([(400, -800), (120, -800), (-400, -800)], "primary", name="Main Street")
+    path = write_osm(tmp_path / "exit.osm", cloverleaf_ways() + [exit_ramp, street])
+    t = only(path, keep_exits=True)
+    assert t.n_ramps == 9 and t.n_roads == 5
+    x = next(r for r in t.roads if r.startswith("X"))
+    assert "Main Street" in t.graph.nodes[x]["expressway"]
+    assert [d["label"].value for _, _, d in t.graph.in_edges(x, data=True)] == ["In-M"]

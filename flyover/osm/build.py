@@ -46,6 +46,7 @@ __all__ = ["OsmOptions", "build_topologies"]
 log = logging.getLogger(__name__)
 
 ROAD, LINK = "road", "link"
+_ROAD_KEYS = ("road", "local")  # topology road keys: a motorway carriageway, an ordinary road
 _PROBE_M = 60.0
 
 
@@ -580,6 +581,20 @@ def _stem_merges(nw: _Network, b: _Builder, edges: list) -> list:
     return out
 
 
+def _exit_edges(nw: _Network, b: _Builder) -> list:
+    """With ``keep_exits``: a link ending (beginning) off the network ends in (begins from)
+    an ordinary road of its own, ``In-M`` (``Out-M``)."""
+    out = []
+    for s in b.st:
+        if s.cls != LINK:
+            continue
+        if not b.starts[s.end] and len(b.ends[s.end]) == 1:
+            out.append((("ramp", s.idx), ("local", s.end), Label.IN_M, s.end))
+        if not b.ends[s.start] and len(b.starts[s.start]) == 1:
+            out.append((("local", s.start), ("ramp", s.idx), Label.OUT_M, s.start))
+    return out
+
+
 def _compact(ref: str) -> str:
     return "".join(ch for ch in ref.replace(";", "-") if ch.isalnum() or ch == "-")
 
@@ -599,13 +614,15 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     b = _Builder(nw)
     edges = [e for n in sorted(set(b.ends) | set(b.starts)) for e in b.junction_edges(n)]
     edges = _stem_merges(nw, b, edges)
-    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] != "road"}, key=str)
-    pairs = [(e[0], e[1]) for e in edges if e[0][0] != "road" and e[1][0] != "road"]
+    if options.keep_exits:
+        edges += _exit_edges(nw, b)
+    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] not in _ROAD_KEYS}, key=str)
+    pairs = [(e[0], e[1]) for e in edges if e[0][0] not in _ROAD_KEYS and e[1][0] not in _ROAD_KEYS]
     comps = _components(ramp_keys, pairs)
     comp_of = {k: ci for ci, comp in enumerate(comps) for k in comp}
     comp_edges: dict[int, list] = defaultdict(list)
     for e in edges:
-        k = e[0] if e[0][0] != "road" else e[1]
+        k = e[0] if e[0][0] not in _ROAD_KEYS else e[1]
         comp_edges[comp_of[k]].append(e)
 
     def corridors(ci):
@@ -616,8 +633,18 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
                         [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
 
     multi = [ci for ci in range(len(comps)) if len(corridors(ci)) >= 2]
+    attached: dict[int, list[int]] = defaultdict(list)
+    if options.keep_exits:  # an exit joins the nearest interchange on its corridor
+        for ci in range(len(comps)):
+            if ci in multi or not corridors(ci):
+                continue
+            near = [(float(np.sqrt(((points(ci)[:, None] - points(cj)[None]) ** 2).sum(-1)).min()), cj)
+                    for cj in multi if corridors(ci) <= corridors(cj)]
+            near = [x for x in near if x[0] <= options.cluster_distance_m]
+            if near:
+                attached[min(near)[1]].append(ci)
     for ci in range(len(comps)):
-        if ci not in multi:
+        if ci not in multi and not any(ci in v for v in attached.values()):
             ways = sorted({w for k in comps[ci] if k[0] == "ramp" for w in b.st[k[1]].ways})
             for w in ways:
                 nw.ignored.setdefault(w, f"joins only corridor {sorted(map(str, corridors(ci)))}")
@@ -635,7 +662,7 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     clusters = _components(multi, close)
     out = []
     for cl in clusters:
-        cl_edges = [e for ci in cl for e in comp_edges[ci]]
+        cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
         try:
             out.append(_topology(nw, b, cl_edges))
         except TopologyError as exc:
@@ -651,7 +678,8 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
 def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     net = nw.net
     road_gids = sorted({k[1] for e in edges for k in e[:2] if k[0] == "road"})
-    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] != "road"},
+    local_nodes = sorted({k[1] for e in edges for k in e[:2] if k[0] == "local"})
+    ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] not in _ROAD_KEYS},
                        key=lambda k: (min(b.st[k[1]].ways) if k[0] == "ramp" else 0, k[1]))
     junction_nodes = sorted({e[3] for e in edges})
     corridors = sorted({b.groups[g].corridor for g in road_gids})
@@ -691,9 +719,10 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             rid, k = f"{base}{k}", k + 1
         road_id[g] = rid
     ramp_id = {k: f"r{i + 1}" for i, k in enumerate(ramp_keys)}
+    local_id = {n: f"X{i + 1}" for i, n in enumerate(local_nodes)}
 
     def nid(k):
-        return road_id[k[1]] if k[0] == "road" else ramp_id[k]
+        return road_id[k[1]] if k[0] == "road" else local_id[k[1]] if k[0] == "local" else ramp_id[k]
 
     def lanes_of(ways):
         vals = [net.ways[w].tag("lanes") for w in ways]
@@ -719,6 +748,12 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         roads.append(Road(road_id[g], exp_of[g], lanes_of(ways_in)))
         node_attrs[road_id[g]] = {"osm_ways": " ".join(map(str, ways_in)), "ref": grp.corridor}
         lines[road_id[g]] = grp.xy[inside].tolist()
+    for n in local_nodes:
+        tags = net.ordinary.get(n, {})
+        label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
+        roads.append(Road(local_id[n], f"{local_id[n]} {label} (node {n})"))
+        node_attrs[local_id[n]] = {"osm_ways": "", "ref": label}
+        lines[local_id[n]] = [nw.xy[n].tolist()]
     ramps = []
     for k in ramp_keys:
         rid = ramp_id[k]
