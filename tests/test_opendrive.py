@@ -169,6 +169,10 @@ def test_movements_of_the_t_follow_ramps_downstream():
     assert movements(sample_geometry("t")) == [("A1", "A1"), ("A2", "A2"), ("C1", "A1"), ("C1", "A2")]
 
 
+def test_movements_through_a_fork_reach_both_branches():
+    assert movements(sample_geometry("fork")) == [("A1", "A1"), ("A1", "B2"), ("B2", "B2")]
+
+
 def test_movements_of_the_loop():
     assert movements(sample_geometry("loop")) == [("A1", "A1"), ("A1", "B1"), ("B1", "B1")]
 

@@ -4,7 +4,8 @@
 climbing to the crossing road; ``"flyover"`` — a right exit that crosses
 over its own expressway to the left; ``"t"`` — a T end: a carriageway
 ending into a ramp (``Out-M``) with a left exit that flies over the through
-road.
+road; ``"fork"`` — a two-lane ramp whose free end forks into two
+one-lane ramps (one back to its road, one up to the crossing road).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from flyover.opendrive.curves import BezierChain
 
 __all__ = ["sample_geometry", "SAMPLES"]
 
-SAMPLES = ("loop", "flyover", "t")
+SAMPLES = ("loop", "flyover", "t", "fork")
 _K = 4 * (math.sqrt(2) - 1) / 3  # Bézier quarter-circle handle
 
 
@@ -87,4 +88,20 @@ def sample_geometry(kind: str) -> InterchangeGeometry:
                    Attachment("C1", "Out-L", 300.0, rw, math.pi / 2, 0.0),
                    Attachment("A2", "In-R", 800.0, -2 * lw, math.pi, 0.0), hump=6.5)
         return InterchangeGeometry("ct", 0, 3, lw, 2.5, rw, (0.0, 6.5), (a1, a2, c1), (r1, r2))
+    if kind == "fork":
+        a1 = RoadGeometry("A1", "A", 2, 0, 0.0, (-500.0, 0.0), 0.0, 1000.0)
+        b2 = RoadGeometry("B2", "B", 2, 1, 6.5, (50.0, 500.0), -math.pi / 2, 1000.0)
+        free = Attachment("", "", 0.0, 0.0, 0.0, 0.0)
+        p1 = [(-300.0, -7.5), (-250.0, -7.5), (-200.0, -20.0), (-150.0, -20.0)]
+        r1 = _ramp("r1", [p1], 0.0, 0.0, Attachment("A1", "Out-R", 200.0, -2 * lw, 0.0, 0.0),
+                   free, lanes=2)
+        r1 = RampGeometry(**{**r1.__dict__, "end": Attachment("", "", 0.0, 0.0, 0.0, 0.0)})
+        L1 = r1.length_m
+        p2 = [(-150.0, -20.0), (-50.0, -20.0), (0.0, -7.5), (100.0, -7.5)]
+        r2 = _ramp("r2", [p2], 0.0, 0.0, Attachment("r1", "Out-L", L1, 0.0, 0.0, 0.0),
+                   Attachment("A1", "In-R", 600.0, -2 * lw, 0.0, 0.0))
+        p3 = [(-150.0, -24.0), (-50.0, -24.0), (42.5, -100.0), (42.5, -200.0)]
+        r3 = _ramp("r3", [p3], 0.0, 6.5, Attachment("r1", "Out-R", L1, -rw, 0.0, 0.0),
+                   Attachment("B2", "In-R", 700.0, -2 * lw, -math.pi / 2, 6.5))
+        return InterchangeGeometry("cfork", 0, 4, lw, 2.5, rw, (0.0, 6.5), (a1, b2), (r1, r2, r3))
     raise ValueError(f"unknown sample {kind!r} (one of {', '.join(SAMPLES)})")

@@ -92,7 +92,9 @@ def movements(g: InterchangeGeometry) -> list[tuple[str, str]]:
                     continue
                 seen.add((rid, 0.0))
                 end = ramp[rid].end
-                if end.parent in ramp:
+                if not end.parent:  # a free end: the ramp forks into others
+                    stack.append((rid, 0.0))
+                elif end.parent in ramp:
                     stack.append((end.parent, end.s_m))
                     stack.append((rid, 0.0))
                 else:

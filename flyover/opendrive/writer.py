@@ -148,8 +148,10 @@ class _Piece:
 @dataclass
 class _Junction:
     id: int
-    event: _Event
+    event: _Event | None
     pieces: dict[str, _Piece] = field(default_factory=dict)  # "parent"/"ramp" -> piece
+    #: a fork (ramps split at a ramp's free end) or join (ramps form a ramp at its free start)
+    group: tuple[_Event, ...] = ()
 
 
 def _rising(w: float, T: float) -> Cubic:
@@ -179,21 +181,30 @@ def _elements(g: InterchangeGeometry, opts: ExportOptions) -> dict[str, _Element
 
 def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOptions) -> None:
     """Move each ramp's end control points exactly onto its attachment (by ≤ snap_tol_m)."""
+    free_end, free_start = _free_ends(g)
     for r in g.ramps:
         el = els[r.id]
         pieces = [p.copy() for p in el.chain.pieces]
         for att, at_start in ((r.start, True), (r.end, False)):
+            if not att.parent:
+                continue  # a free end (fork/join): the children attach to it
             par = els.get(att.parent)
             if par is None:
                 raise ExportError(f"attaches to unknown parent {att.parent!r}", element=r.id)
             side = att.label[-1]
             x, y, h = par.pose(att.s_m)
+            fork = att.parent in free_end or att.parent in free_start
             if side == "M":
                 off = 0.0
+            elif fork:
+                off = 0.0 if side == "L" else -(par.lanes * par.width - el.lanes * el.width)
             elif side == "R":
                 off = -par.lanes * par.width
             else:
                 off = el.lanes * el.width
+            if abs(off - att.offset_m) > 0.01:
+                raise ExportError(f"offset {att.offset_m:.3f} m on {att.parent} is not the lane "
+                                  f"layout's {off:.3f} m", element=r.id)
             px, py = x - math.sin(h) * off, y + math.cos(h) * off
             q = pieces[0] if at_start else pieces[-1]
             i0, i1 = (0, 1) if at_start else (3, 2)
@@ -209,6 +220,8 @@ def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOp
         el.length = el.chain.length
         # the elevation profile covers 0..length_m of the geometry stage; re-check the ends
         for s, att in ((0.0, r.start), (el.length, r.end)):
+            if not att.parent:
+                continue
             dz = abs(el.z(s) - els[att.parent].z(att.s_m))
             if dz > 0.01:
                 log.warning("%s: ramp height %.3f m off its attachment on %s", r.id, dz, att.parent)
@@ -217,18 +230,43 @@ def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOp
 def _events(g: InterchangeGeometry) -> list[_Event]:
     ev = []
     for r in g.ramps:
-        ev.append(_Event(r.start.parent, r.id, r.start.s_m, True, r.start.label[-1]))
-        ev.append(_Event(r.end.parent, r.id, r.end.s_m, False, r.end.label[-1]))
+        if r.start.parent:
+            ev.append(_Event(r.start.parent, r.id, r.start.s_m, True, r.start.label[-1]))
+        if r.end.parent:
+            ev.append(_Event(r.end.parent, r.id, r.end.s_m, False, r.end.label[-1]))
     return ev
+
+
+def _free_ends(g: InterchangeGeometry) -> tuple[set[str], set[str]]:
+    """Ramps with a free end (they fork into others) and with a free start (others join)."""
+    return ({r.id for r in g.ramps if not r.end.parent},
+            {r.id for r in g.ramps if not r.start.parent})
 
 
 def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOptions
                  ) -> tuple[dict[str, list[_Piece]], list[_Junction]]:
     events = _events(g)
+    free_end, free_start = _free_ends(g)
     junctions: list[_Junction] = []
     cuts: dict[str, list[tuple[float, float, _Junction, str]]] = {k: [] for k in els}
+    for stub in sorted(free_end | free_start):
+        forking = stub in free_end
+        group = tuple(sorted((e for e in events if e.parent == stub and e.out == forking),
+                             key=lambda e: e.ramp))
+        if not group:
+            raise ExportError("free end without ramps attached to it", element=stub)
+        j = _Junction(1000 + len(junctions), None, group=group)
+        junctions.append(j)
+        for e in group:
+            ramp = els[e.ramp]
+            other = [x.s for x in events if x.parent == e.ramp and x.side != "M"]
+            ramp_s = 0.0 if e.out else ramp.length
+            lc = min([opts.connecting_length_m, ramp.length / 3]
+                     + [abs(x - ramp_s) / 3 for x in other])
+            span = (0.0, lc) if e.out else (ramp.length - lc, ramp.length)
+            cuts[e.ramp].append((*span, j, f"ramp:{e.ramp}"))
     for e in sorted(events, key=lambda e: (e.parent, e.s, e.ramp)):
-        if e.side == "M":
+        if e.side == "M" or (e.parent in free_end and e.out) or (e.parent in free_start and not e.out):
             continue
         par, ramp = els[e.parent], els[e.ramp]
         same = sorted(x.s for x in events if x.parent == e.parent and x.side != "M")
@@ -265,6 +303,43 @@ def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportO
             out.append(_Piece(k, s, el.length))
         pieces[k] = out
     return pieces, junctions
+
+
+def _link_fork(j: _Junction, pieces: dict[str, list[_Piece]]) -> None:
+    """Road links of a fork (ramps leave a ramp's free end) or join (they form a ramp's start)."""
+    stub = j.group[0].parent
+    for e in j.group:
+        rp = j.pieces[f"ramp:{e.ramp}"]
+        rlist = pieces[e.ramp]
+        ri = rlist.index(rp)
+        if e.out:
+            up, body = pieces[stub][-1], rlist[ri + 1]
+            up.succ, body.pred = ("junction", j.id), ("junction", j.id)
+            rp.pred, rp.succ = ("road", up.road_id, "end"), ("road", body.road_id, "start")
+        else:
+            down, body = pieces[stub][0], rlist[ri - 1]
+            down.pred, body.succ = ("junction", j.id), ("junction", j.id)
+            rp.pred, rp.succ = ("road", body.road_id, "end"), ("road", down.road_id, "start")
+
+
+def _fork_map(stub: _Element, ramp: _Element, side: str, inverse: bool = False):
+    """Lane keys of the stub → lane keys of a ramp that forks from (joins) it, by position.
+
+    The ramp's lanes lie on the stub's: left-aligned for ``L``, right-aligned
+    for ``R``; a lane maps to the one whose centre it shares (within 1 cm).
+    """
+    off = 0.0 if side == "L" else -(stub.lanes * stub.width - ramp.lanes * ramp.width)
+    pairs = {}
+    for j in range(1, ramp.lanes + 1):
+        tc = off - (j - 0.5) * ramp.width
+        for i in range(1, stub.lanes + 1):
+            if abs(tc + (i - 0.5) * stub.width) < 0.01:
+                pairs[("b", i)] = ("b", j)
+    if abs(off - ramp.lanes * ramp.width + stub.lanes * stub.width) < 0.01:
+        pairs[("sh",)] = ("sh",)
+    if inverse:
+        pairs = {v: k for k, v in pairs.items()}
+    return lambda k: pairs.get(k)
 
 
 def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float):
@@ -332,6 +407,9 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
             rid += 1
     # regions (aux lanes, width transitions) and links
     for j in junctions:
+        if j.group:
+            _link_fork(j, pieces)
+            continue
         e = j.event
         par, ramp = els[e.parent], els[e.ramp]
         pp, rp = j.pieces["parent"], j.pieces["ramp"]
@@ -403,6 +481,27 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
 
     same = lambda k: k if k[0] in ("b", "sh") else None  # noqa: E731
     for j in junctions:
+        if j.group:
+            stub = j.group[0].parent
+            for e in j.group:
+                rp = j.pieces[f"ramp:{e.ramp}"]
+                geo = _fork_map(els[stub], els[e.ramp], e.side)
+                if e.out:
+                    up = by_id[rp.pred[1]]
+                    links = keymap(ids(up.road_id, -1), ids(rp.road_id, 0), geo)
+                    conn_links.append((j.id, up.road_id, rp.road_id, links))
+                    pred_links[rp.road_id] = dict((b, a) for a, b in links)
+                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, 0),
+                                                         ids(rp.succ[1], 0), same))
+                else:
+                    body, down = by_id[rp.pred[1]], by_id[rp.succ[1]]
+                    links = keymap(ids(body.road_id, -1), ids(rp.road_id, 0), same)
+                    conn_links.append((j.id, body.road_id, rp.road_id, links))
+                    pred_links[rp.road_id] = dict((b, a) for a, b in links)
+                    inv = _fork_map(els[stub], els[e.ramp], e.side, inverse=True)
+                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, 0),
+                                                         ids(down.road_id, 0), inv))
+            continue
         e = j.event
         pp, rp = j.pieces["parent"], j.pieces["ramp"]
         up = by_id[pp.pred[1]]
@@ -470,8 +569,9 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
             _write_road(root, el, p, layouts[p.road_id], pred_links.get(p.road_id, {}),
                         succ_links.get(p.road_id, {}), ids)
     for j in junctions:
-        je = etree.SubElement(root, "junction", id=str(j.id),
-                              name=f"{j.event.parent}/{j.event.ramp}", type="default")
+        jname = (f"{j.group[0].parent} {'fork' if j.group[0].out else 'join'}" if j.group
+                 else f"{j.event.parent}/{j.event.ramp}")
+        je = etree.SubElement(root, "junction", id=str(j.id), name=jname, type="default")
         cid = 0
         for jid, inc, con, links in conn_links:
             if jid != j.id:
