@@ -37,6 +37,7 @@ from lxml import etree
 from flyover.errors import FlyoverError
 from flyover.geometry.model import InterchangeGeometry
 from flyover.opendrive.curves import BezierChain, Line, ParamPoly3
+from flyover.opendrive.curves import _deriv as _bez_deriv, _point as _bez_point
 from flyover.opendrive.reader import Cubic
 
 __all__ = ["ExportError", "ExportOptions", "xodr_bytes", "write_xodr", "FRAME_NOTE"]
@@ -548,13 +549,20 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
     # -- XML ------------------------------------------------------------------------
     root = etree.Element("OpenDRIVE")
     allpts = []
-    for k, plist in pieces.items():
-        el = els[k]
-        ss = np.linspace(0.0, el.length, max(2, int(el.length // 5) + 2))
-        for s in ss:
-            x, y, h = el.pose(float(s))
-            wdt = el.lanes * el.width + sh + 2 * el.width
-            allpts += [(x + wdt * math.sin(h) * sg, y - wdt * math.cos(h) * sg) for sg in (-1, 1)]
+    for k, el in sorted(els.items()):
+        if el.chain is not None:  # sample by Bézier parameter (no arc-length inversion)
+            t = np.linspace(0.0, 1.0, 33)
+            xy = np.concatenate([_bez_point(p, t) for p in el.chain.pieces])
+            d = np.concatenate([_bez_deriv(p, t) for p in el.chain.pieces])
+            h = np.arctan2(d[:, 1], d[:, 0])
+        else:
+            s_ = np.linspace(0.0, el.length, 2)
+            x0, y0, h0 = el.line
+            xy = np.stack([x0 + s_ * math.cos(h0), y0 + s_ * math.sin(h0)], 1)
+            h = np.full(2, h0)
+        wdt = el.lanes * el.width + sh + 2 * el.width
+        for sg in (-1.0, 1.0):
+            allpts += list(zip(xy[:, 0] + sg * wdt * np.sin(h), xy[:, 1] - sg * wdt * np.cos(h)))
     pts = np.array(allpts)
     head = etree.SubElement(root, "header", revMajor="1", revMinor="7",
                             name=name or f"{g.class_id}/{g.sample}", version="1",

@@ -1,0 +1,82 @@
+"""Export figures: pass rate of each check and seconds per interchange.
+
+Usage::
+
+    .venv/bin/python benchmarks/export.py results/interchanges/*/*/geometry.json
+    .venv/bin/python benchmarks/export.py --samples          # the built-in loop/flyover/T/fork
+
+For every ``geometry.json``: the seconds to write the ``.xodr`` (writer only),
+the seconds of ``netconvert``, and every check of ``flyover validate`` (XSD,
+ASAM checker, 3D continuity, netconvert, routes). Prints one line per
+interchange, then the pass rate per check and the mean/max seconds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from flyover.geometry.model import read_geometry
+from flyover.opendrive.validate import CHECKS, validate_xodr
+from flyover.opendrive.writer import xodr_bytes
+
+
+def run(items, keep: Path | None) -> int:
+    passed = {c: 0 for c in CHECKS}
+    t_xodr, t_nc, n = [], [], 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, g in items:
+            out = (keep or Path(tmp)) / f"{name.replace('/', '_')}.xodr"
+            t0 = time.perf_counter()
+            try:
+                data = xodr_bytes(g)
+            except Exception as exc:  # noqa: BLE001 - a benchmark reports every failure
+                print(f"{name}: export failed: {exc}")
+                n += 1
+                continue
+            t_xodr.append(time.perf_counter() - t0)
+            out.write_bytes(data)
+            results, times, _ = validate_xodr(out, geometry=g)
+            t_nc.append(times.get("netconvert", float("nan")))
+            n += 1
+            for r in results:
+                passed[r.check] += r.ok
+            bad = [f"{r.check}: {r.detail[:200]}" for r in results if not r.ok]
+            print(f"{name}: xodr {t_xodr[-1]:.3f} s, netconvert {t_nc[-1]:.3f} s, "
+                  f"{len(g.ramps)} ramps, {'all checks ok' if not bad else ' | '.join(bad)}", flush=True)
+    print(f"\n{n} interchanges")
+    for c in CHECKS:
+        print(f"  {c:<11} pass rate {passed[c]}/{n} = {100 * passed[c] / max(n, 1):.0f} %")
+    if t_xodr:
+        print(f"  seconds per interchange, writing .xodr: mean {statistics.mean(t_xodr):.3f}, "
+              f"max {max(t_xodr):.3f}")
+        print(f"  seconds per interchange, netconvert:    mean {statistics.mean(t_nc):.3f}, "
+              f"max {max(t_nc):.3f}")
+    return 0 if n and all(passed[c] == n for c in CHECKS) else 1
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("geometry", nargs="*", help="geometry.json files")
+    ap.add_argument("--samples", action="store_true", help="the built-in small interchanges")
+    ap.add_argument("--keep", type=Path, help="keep the .xodr files in this folder")
+    a = ap.parse_args(argv)
+    items = []
+    if a.samples:
+        from flyover.opendrive.samples import SAMPLES, sample_geometry
+
+        items += [(k, sample_geometry(k)) for k in SAMPLES]
+    for p in a.geometry:
+        g = read_geometry(p)
+        items.append((str(Path(p).parent), g))
+    if a.keep:
+        a.keep.mkdir(parents=True, exist_ok=True)
+    return run(items, a.keep)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
