@@ -212,17 +212,18 @@ class _Network:
 
     # -- 2. snapping ------------------------------------------------------
     def snap_dangling_links(self) -> None:
-        road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
-        if not road:
-            return
+        road = None
         for n in sorted(self.succ.keys() | self.pred.keys()):
             ins, outs = self._classes_at(n)
             deg = len(self.pred[n]) + len(self.succ[n])
             if deg != 1 or ROAD in ins | outs or n in self.net.ordinary:
                 continue
-            road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
-            pa = np.array([self.xy[a] for a, _ in road])
-            pb = np.array([self.xy[b] for _, b in road])
+            if road is None:  # (re)built only after a carriageway segment was split
+                road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
+                pa = np.array([self.xy[a] for a, _ in road]).reshape(-1, 2)
+                pb = np.array([self.xy[b] for _, b in road]).reshape(-1, 2)
+            if not road:
+                return
             d, t = segment_distances(self.xy[n], pa, pb)
             k = int(np.argmin(d))
             if d[k] > self.opt.snap_tolerance_m:
@@ -237,6 +238,7 @@ class _Network:
                 self.xy[v] = pa[k] + t[k] * (pb[k] - pa[k])
                 self._remove_seg(a, b)
                 self._add_chain(wid_road, [a, v, b])
+                road = None
             wid_link = self.seg[(self.pred[n][0], n)] if self.pred[n] else self.seg[(n, self.succ[n][0])]
             self._add_chain(wid_link, [n, v] if self.pred[n] else [v, n])
             self.snapped[v] = float(d[k])
