@@ -10,6 +10,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/topology.smk"
+include: "workflow/rules/geometry.smk"
 include: "workflow/rules/export.smk"
 
 
@@ -19,4 +20,5 @@ rule all:
         "results/rejected.parquet",
         class_topology_outputs,
         "results/validation.parquet",
+        "results/geometry.parquet",
     default_target: True

@@ -30,9 +30,11 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import differential_evolution
+from scipy.spatial import cKDTree
 
 from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline, turning
 from flyover.geometry.profile import climb_distance, elevation_polys, heights, max_grade
@@ -96,7 +98,7 @@ class FreeEnd:
     z: float
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(eq=False)
 class Obstacles:
     """Already placed elements a ramp must not meet at the same level.
 
@@ -111,6 +113,11 @@ class Obstacles:
     half_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
     owner: tuple[str, ...] = ()
     line_names: tuple[str, ...] = ()
+
+    @cached_property
+    def tree(self) -> cKDTree:
+        """KD-tree of :attr:`points` (built once)."""
+        return cKDTree(self.points)
 
 
 @dataclass(frozen=True)
@@ -134,7 +141,7 @@ class FitSettings:
     """Settings of the search and the tolerances (from config ``geometry``)."""
 
     popsize: int = 8
-    maxiter: int = 400
+    maxiter: int = 200
     min_generations: int = 25
     tol_radius: float = 0.05
     tol_slope_pp: float = 0.2
@@ -298,11 +305,16 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
         hit = (along > tlo) & (along < thi) & (lat > llo - hw) & (lat < lhi + hw)
         bad |= hit & (np.abs(z - zl) < settings.clearance_m)
     if len(obstacles.points):
-        q = obstacles.points
-        d2 = ((c[..., None, :] - q) ** 2).sum(-1)  # (P, N, M)
-        near = d2 < (hw + obstacles.half_width) ** 2
-        low = np.abs(z[..., None] - obstacles.z) < settings.clearance_m
-        bad |= (near & low).any(-1)
+        flat = c.reshape(-1, 2)
+        reach = hw + float(obstacles.half_width.max())
+        dist, idx = obstacles.tree.query(flat, k=min(8, len(obstacles.points)),
+                                         distance_upper_bound=reach)
+        dist, idx = dist.reshape(len(flat), -1), idx.reshape(len(flat), -1)
+        found = np.isfinite(dist)
+        j = np.where(found, idx, 0)
+        near = found & (dist < hw + obstacles.half_width[j])
+        low = np.abs(z.reshape(-1, 1) - obstacles.z[j]) < settings.clearance_m
+        bad |= (near & low).any(-1).reshape(bad.shape)
     return (bad & inner).sum(-1)
 
 
@@ -350,8 +362,8 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     def f(x: np.ndarray) -> np.ndarray:
         t = terms(x)
         return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
-                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.02 * t["conflicts"]
-                + 0.01 * np.minimum(t["g2"], 10.0) + 0.5 * t["excess"] ** 2)
+                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.5 * t["conflicts"]
+                + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2)
 
     return f, terms
 
@@ -387,7 +399,8 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
     def good(xk: np.ndarray) -> bool:
         t = terms(xk[:, None])
         return bool(np.abs(t["rad_err"][0]) < settings.accept_radius and t["shortfall"][0] == 0
-                    and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0)
+                    and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0
+                    and t["excess"][0] < 0.05)
 
     def stop(intermediate_result) -> bool:
         gen[0] += 1

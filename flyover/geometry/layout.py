@@ -1,0 +1,601 @@
+"""Road layout and ramp assembly: a topology + a feature set → :class:`InterchangeGeometry`.
+
+Layout
+------
+* Expressways are straight lines through the centre: the first through
+  expressway runs north–south (carriageway 1 northbound), the second east–west;
+  its direction is chosen so that as many ramps as possible leave and join on
+  the side they turn to (right exits turning right). Further expressways are
+  placed at 45° steps. An expressway that ends here (``Out-M``/``In-M``, a T)
+  is a half line: its carriageways end/begin ``terminal_m`` from the centre on
+  the side the topology implies. Each expressway is on its own level
+  (0, 1, ...), the terminating one of a T above the through one.
+* A carriageway's reference line is its left (median) edge, ``median_m / 2``
+  from the axis.
+* Ramps attach along their parents; *which side of the centre* follows from
+  the movement (right turns and direct left turns exit before the crossing and
+  merge after it; loops do the opposite; stubs that split exit before, those
+  that merge join after), and the order of attachments on one parent follows
+  ``pos`` (attachments placed later keep ``gap_m`` from earlier ones).
+* A loop is a left movement that leaves a road on its right (``Out-R``) and
+  does not end straight on (``In-M``), unless its exit ``pos`` is below 0.4
+  (then it is a semi-directional flyover); it turns 270° to the right.
+* A stub ramp with no end (it splits into other ramps) or no start (formed
+  by merging ramps) gets a free end; it climbs a third of the height between
+  its road and its children's roads, so every ramp of a chain climbs.
+
+Ramps are fitted one by one (parents first) by :func:`flyover.geometry.fit.fit_ramp`,
+avoiding same-level conflicts with roads and the ramps already fitted; a ramp
+that still conflicts is lifted to the next level (a flyover), and a ramp that
+misses its targets is resampled (Algorithm 1) through ``resampler``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field, replace
+from typing import Callable, Mapping
+
+import numpy as np
+
+from flyover.errors import FlyoverError
+from flyover.geometry.bezier import sample_spline
+from flyover.geometry.fit import FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, fit_ramp
+from flyover.geometry.model import (
+    Attachment, InterchangeGeometry, RampGeometry, RoadGeometry,
+)
+from flyover.geometry.profile import evaluate_polys
+from flyover.topology.model import Kind, Label, Topology
+
+__all__ = ["GeometryError", "LayoutSettings", "RampFeatures", "RampOutcome", "Interchange",
+           "build_interchange"]
+
+log = logging.getLogger(__name__)
+
+
+class GeometryError(FlyoverError):
+    """A topology cannot be laid out (e.g. a ramp with neither start nor end)."""
+
+
+@dataclass(frozen=True)
+class LayoutSettings:
+    """Layout settings (config ``geometry``)."""
+
+    lane_width_m: float = 3.75
+    shoulder_width_m: float = 2.5
+    ramp_lane_width_m: float = 4.0
+    median_m: float = 4.0
+    level_height_m: float = 6.5
+    levels: int = 4
+    default_lanes: int = 2
+    crossing_margin_m: float = 15.0
+    gap_m: float = 40.0
+    reach_m: float = 1500.0
+    terminal_m: float = 120.0
+    road_margin_m: float = 100.0
+    max_resamples: int = 3
+    fit: FitSettings = field(default_factory=FitSettings)
+
+    @classmethod
+    def from_config(cls, cfg: Mapping) -> "LayoutSettings":
+        """From the ``geometry`` section of the workflow config."""
+        de = dict(cfg.get("de", {}))
+        fit = FitSettings(**{k: v for k, v in de.items() if k in FitSettings.__dataclass_fields__},
+                          clearance_m=float(cfg.get("clearance_m", 5.5)))
+        keys = set(cls.__dataclass_fields__) - {"fit"}
+        return cls(**{k: v for k, v in cfg.items() if k in keys}, fit=fit)
+
+    @property
+    def levels_m(self) -> tuple[float, ...]:
+        return tuple(i * self.level_height_m for i in range(self.levels))
+
+
+@dataclass(frozen=True)
+class RampFeatures:
+    """Targets of one ramp: minimum radius (may be ``inf``) and maximum slope."""
+
+    radius_m: float
+    slope_pct: float
+
+
+@dataclass(frozen=True)
+class RampOutcome:
+    """How one ramp came out: the fit, first-try success and resamples."""
+
+    ramp: str
+    fit: RampFit
+    first_try_ok: bool
+    resamples: int
+    infeasible: str
+    evaluations: int
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Interchange:
+    """A built interchange: the geometry.json value and per-ramp outcomes."""
+
+    geometry: InterchangeGeometry
+    outcomes: tuple[RampOutcome, ...]
+
+
+# -- roads ----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Road:
+    id: str
+    expressway: str
+    lanes: int
+    level: int
+    z: float
+    origin: tuple[float, float]
+    heading: float
+    t_lo: float  # extent of the carriageway along its line (-inf .. inf for through roads)
+    t_hi: float
+    half_width: float  # of its expressway, median to outer edge
+
+
+def _wrap(a: float) -> float:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _ends(topo: Topology, ramp: str) -> tuple[tuple[str, Label] | None, tuple[str, Label] | None]:
+    g = topo.graph
+    starts = sorted((u, d["label"]) for u, _, d in g.in_edges(ramp, data=True) if d["label"].is_out)
+    ends = sorted((v, d["label"]) for _, v, d in g.out_edges(ramp, data=True)
+                  if not d["label"].is_out)
+    return (starts[0] if starts else None), (ends[0] if ends else None)
+
+
+def _road_of(topo: Topology, node: str, forward: bool, seen=None) -> str | None:
+    """The road a chain of ramps leads to (forward) or comes from."""
+    seen = seen or set()
+    if topo.graph.nodes[node]["kind"] is Kind.ROAD:
+        return node
+    if node in seen:
+        return None
+    seen.add(node)
+    start, end = _ends(topo, node)
+    nxt = end if forward else start
+    if nxt is not None:
+        return _road_of(topo, nxt[0], forward, seen)
+    g = topo.graph
+    others = sorted(v for _, v, d in g.out_edges(node, data=True)) if forward else \
+        sorted(u for u, _, d in g.in_edges(node, data=True))
+    for o in others:
+        r = _road_of(topo, o, forward, seen)
+        if r:
+            return r
+    return None
+
+
+def _terminal(topo: Topology, road: str) -> str | None:
+    """``end`` if the carriageway ends here (Out-M), ``start`` if it begins (In-M)."""
+    g = topo.graph
+    if any(d["label"] is Label.OUT_M for _, _, d in g.out_edges(road, data=True)):
+        return "end"
+    if any(d["label"] is Label.IN_M for _, _, d in g.in_edges(road, data=True)):
+        return "start"
+    return None
+
+
+def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings) -> dict[str, _Road]:
+    exps = topo.expressways
+    terminal = {e: any(_terminal(topo, r) for r in rs) for e, rs in exps.items()}
+    order = sorted(exps, key=lambda e: (terminal[e], e))
+    half = {e: st.median_m / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
+            + st.shoulder_width_m for e, rs in exps.items()}
+
+    def place(options: dict[str, float]) -> dict[str, _Road]:
+        roads = {}
+        for k, e in enumerate(order):
+            rs = exps[e]
+            h1 = options[e]
+            for i, r in enumerate(rs):
+                h = h1 if i == 0 else h1 + np.pi
+                o = (st.median_m / 2) * np.array([np.sin(h), -np.cos(h)])
+                other = max([half[x] for x in exps if x != e] or [0.0])
+                term = _terminal(topo, r)
+                t_lo, t_hi = -np.inf, np.inf
+                if term == "end":
+                    t_hi = -(other + st.terminal_m)
+                elif term == "start":
+                    t_lo = other + st.terminal_m
+                n = lanes.get(r, st.default_lanes)
+                roads[r] = _Road(r, e, int(n), k, k * st.level_height_m, (float(o[0]), float(o[1])),
+                                 float(_wrap(h)), t_lo, t_hi, half[e])
+        return roads
+
+    base = {e: np.pi / 2 - k * np.pi / 2 if k < 2 else np.pi / 2 - k * np.pi / 4
+            for k, e in enumerate(order)}
+    best, best_score = None, -1e9
+    for flip in ([False, True] if len(order) > 1 else [False]):
+        opts = dict(base)
+        if flip:
+            opts[order[1]] += np.pi
+        roads = place(opts)
+        score = 0
+        for ramp in topo.ramps:
+            a = _road_of(topo, ramp, False)
+            b = _road_of(topo, ramp, True)
+            if not a or not b:
+                continue
+            raw = _wrap(roads[b].heading - roads[a].heading)
+            if abs(abs(raw) - np.pi / 2) > 0.1:
+                continue
+            turn = "left" if raw > 0 else "right"
+            for end in _ends(topo, ramp):
+                if end is None or end[1].side == "middle":
+                    continue
+                score += 1 if end[1].side == turn else (-1 if end[1].side == "left" else 0)
+        if score > best_score:
+            best, best_score = roads, score
+    return best
+
+
+# -- ramps -------------------------------------------------------------------------
+
+class _Builder:
+    def __init__(self, topo: Topology, lanes: Mapping[str, int],
+                 features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
+        self.topo, self.st, self.seed = topo, st, seed
+        self.features = dict(features)
+        self.roads = _layout_roads(topo, lanes, st)
+        self.g = topo.graph
+        self.fits: dict[str, RampFit] = {}
+        self.rails: dict[str, dict] = {}  # fitted ramp → stations
+        self.attached: dict[str, list[tuple[float, float]]] = {}  # parent → (pos, t)
+        self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
+
+    def _lanes(self, ramp: str) -> int:
+        start, end = _ends(self.topo, ramp)
+        if end is None:
+            return max(1, sum(1 for _, _, d in self.g.out_edges(ramp, data=True) if d["label"].is_out))
+        if start is None:
+            return max(1, sum(1 for _, _, d in self.g.in_edges(ramp, data=True)
+                              if not d["label"].is_out))
+        return 1
+
+    # movement classification
+    def _heading_at(self, node: str, s: float | None = None) -> float:
+        if node in self.roads:
+            return self.roads[node].heading
+        fit = self.fits[node]
+        if s is None:
+            return fit.end_pose[2]
+        st = self.rails[node]
+        return float(np.interp(s, st["s"], st["heading"]))
+
+    def _is_loop(self, ramp: str, raw: float) -> bool:
+        start, end = _ends(self.topo, ramp)
+        if start is None or end is None or start[0] not in self.roads:
+            return False
+        if start[1] is not Label.OUT_R or end[1] is Label.IN_M:
+            return False
+        if not (abs(raw - np.pi / 2) < 0.2):
+            return False
+        pos = self.g.edges[start[0], ramp].get("pos")
+        return pos is None or pos >= 0.4
+
+    def _road_rail(self, road: str, ramp: str, label: Label, is_start: bool, loop: bool,
+                   pos: float | None, width: float) -> Rail:
+        r, st = self.roads[road], self.st
+        if label in (Label.OUT_M, Label.IN_M):
+            off = 0.0
+        elif label.side == "right":
+            off = -r.lanes * st.lane_width_m
+        else:
+            off = width
+        other = max([x.half_width for x in self.roads.values() if x.expressway != r.expressway]
+                    or [0.0])
+        tz = other + st.crossing_margin_m
+        if label is Label.OUT_M or (pos is not None and pos >= 0.99 and np.isfinite(r.t_hi)):
+            lo = hi = r.t_hi
+        elif label is Label.IN_M or (pos is not None and pos <= 0.01 and np.isfinite(r.t_lo)):
+            lo = hi = r.t_lo
+        else:
+            before = is_start != loop
+            lo, hi = (-st.reach_m, -tz) if before else (tz, st.reach_m)
+            lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
+            if pos is not None:
+                for p, t in self.attached.get(road, []):
+                    if p < pos:
+                        lo = max(lo, t + st.gap_m)
+                    elif p > pos:
+                        hi = min(hi, t - st.gap_m)
+            if lo > hi - 1.0:
+                lo, hi = (-st.reach_m, -tz) if before else (tz, st.reach_m)
+        if hi - lo < 1e-3:
+            hi = lo + 1e-3
+        return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
+
+    def _ramp_rail(self, parent: str, label: Label, is_start: bool, width: float) -> Rail:
+        st = self.rails[parent]
+        length = st["s"][-1]
+        pw = self.width[parent]
+        p_start, p_end = _ends(self.topo, parent)
+        if label.side == "right":
+            off = -pw if (p_end is not None and p_start is not None) else -(pw - width)
+        else:
+            off = width if (p_end is not None and p_start is not None) else 0.0
+        if is_start and p_end is None:
+            lo = hi = length
+        elif not is_start and p_start is None:
+            lo = hi = 0.0
+        elif is_start:
+            lo, hi = 0.15 * length, 0.6 * length
+        else:
+            lo, hi = 0.4 * length, 0.85 * length
+        if hi - lo < 1e-3:
+            hi = lo + 1e-3
+        return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
+
+    def _goal_z(self, ramp: str, forward: bool) -> float:
+        g = self.g
+        if forward:
+            kids = [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out]
+        else:
+            kids = [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
+        zs = [self.roads[r].z for r in (_road_of(self.topo, k, forward) for k in kids) if r]
+        return float(np.mean(zs)) if zs else 0.0
+
+    def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
+        start, end = _ends(self.topo, ramp)
+        width = self.width[ramp]
+        st = self.st
+        if start is None and end is None:
+            raise GeometryError("ramp has neither a start nor an end", source=self.topo.source,
+                                element=ramp)
+        # headings of the ends (nominal) → raw turn
+        h_a = self._nominal_heading(start, True) if start else None
+        h_b = self._nominal_heading(end, False) if end else None
+        free = None
+        if start is None or end is None:
+            raw, loop = 0.0, False
+            fixed = start or end
+            side = fixed[1].side
+            sgn = -1.0 if side == "right" else (1.0 if side == "left" else 0.0)
+            lat = (sorted((sgn * 3.0, sgn * 40.0)) if sgn else (-10.0, 10.0))
+            if end is None:  # split stub: free end
+                z0 = self._end_z(start)
+                zf = z0 + (self._goal_z(ramp, True) - z0) / 3.0
+            else:
+                z1 = self._end_z(end)
+                zf = z1 + (self._goal_z(ramp, False) - z1) / 3.0
+                lat = (-lat[1], -lat[0]) if sgn else lat
+            free = FreeEnd((60.0, 400.0), lat, (-np.pi / 4, np.pi / 4), zf)
+        else:
+            raw = _wrap(h_b - h_a)
+            loop = self._is_loop(ramp, raw)
+        turn = raw - 2 * np.pi if loop else raw
+        pieces = 3 if abs(turn) > 2.2 else 2
+        a = self._rail(ramp, start, True, loop, width) if start else None
+        b = self._rail(ramp, end, False, loop, width) if end else None
+        z_a = self._end_z(start) if start else free.z
+        z_b = self._end_z(end) if end else free.z
+        crest = None
+        direct_left = (not loop and start is not None and end is not None and raw > 1.0)
+        if direct_left:
+            need = max(z_a, z_b) + st.fit.clearance_m - 1e-6
+            crest = next((z for z in st.levels_m if z >= need), st.levels_m[-1])
+        return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
+                        float(feat.slope_pct), crest)
+
+    def _nominal_heading(self, end, is_start) -> float:
+        node, label = end
+        if node in self.roads:
+            return self.roads[node].heading
+        st = self.rails[node]
+        p_start, p_end = _ends(self.topo, node)
+        if is_start:
+            s = st["s"][-1] if p_end is None else 0.4 * st["s"][-1]
+        else:
+            s = 0.0 if p_start is None else 0.6 * st["s"][-1]
+        return float(np.interp(s, st["s"], st["heading"]))
+
+    def _end_z(self, end) -> float:
+        node, _ = end
+        if node in self.roads:
+            return self.roads[node].z
+        st = self.rails[node]
+        return float(np.mean(st["z"]))  # refined per candidate by the rail
+
+    def _rail(self, ramp, end, is_start, loop, width) -> Rail:
+        node, label = end
+        if node in self.roads:
+            pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
+            return self._road_rail(node, ramp, label, is_start, loop, pos, width)
+        return self._ramp_rail(node, label, is_start, width)
+
+    def obstacles(self) -> Obstacles:
+        st = self.st
+        lines = []
+        names = []
+        for r in self.roads.values():
+            d = (math.cos(r.heading), math.sin(r.heading))
+            lines.append([r.origin[0], r.origin[1], d[0], d[1], max(r.t_lo, -1e5),
+                          min(r.t_hi, 1e5), -r.lanes * st.lane_width_m, 0.0, r.z])
+            names.append(r.id)
+        pts, zs, hw, owner = [], [], [], []
+        for rid, s in self.rails.items():
+            pts.append(s["centre"])
+            zs.append(s["z"])
+            hw.append(np.full(len(s["z"]), self.width[rid] / 2))
+            owner += [rid] * len(s["z"])
+        if pts:
+            return Obstacles(np.array(lines), np.concatenate(pts), np.concatenate(zs),
+                             np.concatenate(hw), tuple(owner), tuple(names))
+        return Obstacles(np.array(lines), line_names=tuple(names))
+
+    def record(self, ramp: str, fit: RampFit) -> None:
+        self.fits[ramp] = fit
+        dense = sample_spline(fit.ctrl, 64)
+        xy = dense.xy
+        tang = dense.tangent
+        head = np.unwrap(np.arctan2(tang[:, 1], tang[:, 0]))
+        z, _ = evaluate_polys(fit.elevation, dense.s)
+        speed = np.hypot(tang[:, 0], tang[:, 1])[:, None]
+        right = np.stack([tang[:, 1], -tang[:, 0]], axis=-1) / np.maximum(speed, 1e-9)
+        s = dense.s
+        keep = np.concatenate([[True], np.diff(s) > 1e-9])
+        self.rails[ramp] = {"s": s[keep], "xy": xy[keep], "heading": head[keep], "z": z[keep],
+                            "centre": (xy + right * self.width[ramp] / 2)[keep]}
+        for end, t, is_start in ((fit.spec.start, fit.start_s, True), (fit.spec.end, fit.end_s, False)):
+            if end is None or end.parent not in self.roads:
+                continue
+            key = (end.parent, ramp) if is_start else (ramp, end.parent)
+            pos = self.g.edges[key].get("pos")
+            if pos is not None:
+                self.attached.setdefault(end.parent, []).append((pos, t))
+
+    def order(self) -> list[str]:
+        done: set[str] = set()
+        out = []
+        todo = list(self.topo.ramps)
+        while todo:
+            ready = []
+            for r in todo:
+                start, end = _ends(self.topo, r)
+                deps = [e[0] for e in (start, end) if e and e[0] not in self.roads]
+                if all(d in done for d in deps):
+                    ready.append(r)
+            if not ready:
+                raise GeometryError("ramps attach to each other in a cycle", source=self.topo.source,
+                                    element=", ".join(todo))
+            # stubs and road-to-road ramps first, in id order
+            for r in ready:
+                done.add(r)
+                out.append(r)
+                todo.remove(r)
+        return out
+
+
+def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
+    st = b.st
+    evals, secs = 0, 0.0
+    obst = b.obstacles()
+    while True:
+        fit = fit_ramp(spec, obst, st.fit, seed=seed)
+        evals += fit.evaluations
+        secs += fit.seconds
+        if fit.conflicts == 0:
+            return fit, evals, secs
+        higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6]
+        if not higher:
+            return fit, evals, secs
+        spec = replace(spec, z_crest=higher[0])
+
+
+def build_interchange(topology: Topology, lanes: Mapping[str, int],
+                      features: Mapping[str, RampFeatures], *, class_id: str = "",
+                      sample: int = 0, seed: int = 0, settings: LayoutSettings | None = None,
+                      resampler: Callable[[str, int], RampFeatures | None] | None = None
+                      ) -> Interchange:
+    """Lay out the roads and fit every ramp of one feature set.
+
+    Parameters
+    ----------
+    topology
+        The interchange topology.
+    lanes
+        Road id → number of lanes (missing roads get ``default_lanes``).
+    features
+        Ramp id → :class:`RampFeatures` (targets).
+    resampler
+        ``(ramp, attempt) → RampFeatures`` drawing new targets for a ramp that
+        misses its targets (Algorithm 1); ``None`` disables resampling.
+
+    Raises
+    ------
+    GeometryError
+        When the topology cannot be laid out (naming the element).
+    """
+    st = settings or LayoutSettings()
+    b = _Builder(topology, lanes, features, st, seed)
+    outcomes = []
+    for k, ramp in enumerate(b.order()):
+        if ramp not in features:
+            raise GeometryError("no features for ramp", source=topology.source, element=ramp)
+        feat = features[ramp]
+        rseed = (seed * 1_000_003 + k * 7919) % (2**32)
+        fit, evals, secs = _fit_with_levels(b, b.spec(ramp, feat), rseed)
+        first_ok = fit.ok
+        attempts, tried = 0, [fit]
+        while not fit.ok and resampler is not None and attempts < st.max_resamples:
+            attempts += 1
+            new = resampler(ramp, attempts)
+            if new is None:
+                break
+            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + attempts)
+            evals += e2
+            secs += s2
+            tried.append(fit2)
+            fit = fit2
+        if not fit.ok:
+            fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))
+        reason = "" if fit.ok else _reason(fit)
+        b.record(ramp, fit)
+        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs))
+    return Interchange(_assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
+
+
+def _reason(fit: RampFit) -> str:
+    parts = []
+    sp = fit.spec
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    if not fit.slope_ok:
+        if abs(za - zb) < 1e-6 and fit.z_crest <= max(za, zb) + 1e-6:
+            parts.append(f"slope: level ramp (both ends at z={za:.1f} m) cannot have a "
+                         f"{sp.target_slope_pct:g} % slope")
+        else:
+            parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
+    if not fit.radius_ok:
+        parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
+    if fit.conflicts:
+        parts.append(f"same-level conflict ({fit.conflicts} samples)")
+    return "; ".join(parts)
+
+
+def _assemble(b: _Builder, class_id: str, sample: int, seed: int,
+              outcomes: list[RampOutcome]) -> InterchangeGeometry:
+    st = b.st
+    # road extents: cover every attachment and ramp with a margin
+    ts: dict[str, list[float]] = {r: [] for r in b.roads}
+    for o in outcomes:
+        f = o.fit
+        for rail, t in ((f.spec.start, f.start_s), (f.spec.end, f.end_s)):
+            if rail is not None and rail.parent in b.roads:
+                ts[rail.parent].append(t)
+    extent = max([abs(t) for v in ts.values() for t in v] or [st.reach_m / 3])
+    extent += st.road_margin_m
+    t0: dict[str, float] = {}
+    roads = []
+    for r in sorted(b.roads.values(), key=lambda r: r.id):
+        lo = r.t_lo if np.isfinite(r.t_lo) else -extent
+        hi = r.t_hi if np.isfinite(r.t_hi) else extent
+        t0[r.id] = lo
+        start = np.array(r.origin) + lo * np.array([math.cos(r.heading), math.sin(r.heading)])
+        roads.append(RoadGeometry(r.id, r.expressway, r.lanes, r.level, r.z,
+                                  (float(start[0]), float(start[1])), r.heading, float(hi - lo)))
+    ramps = []
+    for o in sorted(outcomes, key=lambda o: o.ramp):
+        f = o.fit
+        atts = []
+        for rail, s, pose in ((f.spec.start, f.start_s, f.start_pose),
+                              (f.spec.end, f.end_s, f.end_pose)):
+            if rail is None:
+                atts.append(Attachment("", "", 0.0, 0.0, _wrap(pose[2]), pose[3]))
+                continue
+            s_m = s - t0[rail.parent] if rail.parent in b.roads else s
+            atts.append(Attachment(rail.parent, rail.label, float(s_m), float(rail.offset_m),
+                                   float(_wrap(pose[2])), float(pose[3])))
+        ramps.append(RampGeometry(
+            id=o.ramp, lanes=int(round(b.width[o.ramp] / st.ramp_lane_width_m)),
+            plan=f.pieces(), elevation=f.elevation, start=atts[0], end=atts[1],
+            target_radius_m=f.spec.target_radius_m, target_slope_pct=f.spec.target_slope_pct,
+            min_radius_m=f.min_radius_m, max_slope_pct=f.max_slope_pct, length_m=f.length_m,
+            ok=f.ok, resamples=o.resamples, infeasible=o.infeasible))
+    return InterchangeGeometry(class_id, int(sample), int(seed), st.lane_width_m,
+                               st.shoulder_width_m, st.ramp_lane_width_m, st.levels_m,
+                               tuple(roads), tuple(ramps))
