@@ -12,7 +12,7 @@ from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.samples import SAMPLES, sample_geometry
 from flyover.opendrive.validate import movements, xsd_errors
-from flyover.opendrive.writer import ExportError, xodr_bytes
+from flyover.opendrive.writer import ExportError, ExportOptions, xodr_bytes
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def xodrs(tmp_path_factory):
 @pytest.mark.parametrize("kind", SAMPLES)
 def test_written_file_is_valid_against_the_asam_xsd(xodrs, kind):
     net = read_xodr(xodrs[kind])
-    assert net.version == (1, 7)
+    assert net.version == (1, 8)
     assert xsd_errors(xodrs[kind], net.version) == []
 
 
@@ -138,6 +138,19 @@ def test_continuity_check_catches_a_height_step(xodrs, tmp_path):
     ok, detail = check_continuity(read_xodr(bad))
     assert not ok
     assert "z 0.03" in detail
+
+
+def test_the_same_file_is_valid_when_declared_opendrive_1_7(tmp_path):
+    path = tmp_path / "t17.xodr"
+    path.write_bytes(xodr_bytes(sample_geometry("t"), ExportOptions(opendrive_minor=7)))
+    net = read_xodr(path)
+    assert net.version == (1, 7)
+    assert xsd_errors(path, net.version) == []
+
+
+def test_unsupported_version_is_rejected():
+    with pytest.raises(ExportError, match="opendrive_minor"):
+        ExportOptions(opendrive_minor=5)
 
 
 def test_export_is_byte_reproducible():

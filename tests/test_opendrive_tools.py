@@ -49,6 +49,22 @@ def test_every_check_passes_and_every_movement_routes(built, kind):
     assert times["netconvert"] > 0
 
 
+def test_across_versions_1_7_and_1_8_every_checker_completes_without_issue(tmp_path):
+    from flyover.opendrive.writer import ExportOptions, xodr_bytes
+
+    status = {}
+    for minor in (7, 8):
+        path = tmp_path / f"fork_1{minor}.xodr"
+        path.write_bytes(xodr_bytes(sample_geometry("fork"), ExportOptions(opendrive_minor=minor)))
+        for o in qc.run_asam_checker(path):
+            assert not o.issues, (minor, o.checker_id, o.issues[:2])
+            if o.status == "completed":
+                status[o.checker_id] = "completed"
+            else:
+                status.setdefault(o.checker_id, o.status)
+    assert status and set(status.values()) == {"completed"}, status
+
+
 def test_asam_checker_flags_a_schema_violation(tmp_path):
     bad = tmp_path / "bad.xodr"
     bad.write_text('<OpenDRIVE><header revMajor="1" revMinor="7"/><road id="1" length="10">'

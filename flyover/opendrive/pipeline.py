@@ -29,7 +29,8 @@ VALIDATION_SCHEMA = pa.schema([("class_id", pa.string()), ("sample", pa.int32())
 def export_options(config: Mapping) -> ExportOptions:
     """:class:`ExportOptions` from the workflow config's ``export`` section."""
     sec = dict(config.get("export", {}))
-    return ExportOptions(**{k: float(v) for k, v in sec.items()
+    kinds = {"opendrive_minor": int}
+    return ExportOptions(**{k: kinds.get(k, float)(v) for k, v in sec.items()
                             if k in ExportOptions.__dataclass_fields__})
 
 

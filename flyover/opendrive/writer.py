@@ -1,4 +1,4 @@
-"""Write an interchange (``geometry.json``) as OpenDRIVE 1.7.
+"""Write an interchange (``geometry.json``) as OpenDRIVE 1.8 (or 1.7).
 
 Model
 -----
@@ -65,11 +65,20 @@ class ExportOptions:
         Length over which an auxiliary lane opens/closes, or lane widths change.
     snap_tol_m
         Largest correction of a ramp end onto its attachment before failing.
+    opendrive_minor
+        The declared OpenDRIVE version 1.<minor>: 8 (default) or 7; the
+        document is the same and valid against both schemas.
     """
 
     connecting_length_m: float = 15.0
     taper_length_m: float = 80.0
     snap_tol_m: float = 0.5
+    opendrive_minor: int = 8
+
+    def __post_init__(self) -> None:
+        if self.opendrive_minor not in (7, 8):
+            raise ExportError(f"OpenDRIVE 1.{self.opendrive_minor} not supported (7 or 8)",
+                              element="export.opendrive_minor")
 
 
 # -- elements ---------------------------------------------------------------------------
@@ -394,7 +403,7 @@ def _cubic_attrs(c: Cubic, s_name: str = "s") -> dict[str, str]:
 
 def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
                name: str | None = None) -> bytes:
-    """The OpenDRIVE 1.7 document of an interchange (byte-reproducible)."""
+    """The OpenDRIVE document of an interchange (byte-reproducible)."""
     opts = options or ExportOptions()
     els = _elements(g, opts)
     _snap_ramps(g, els, opts)
@@ -564,7 +573,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         for sg in (-1.0, 1.0):
             allpts += list(zip(xy[:, 0] + sg * wdt * np.sin(h), xy[:, 1] - sg * wdt * np.cos(h)))
     pts = np.array(allpts)
-    head = etree.SubElement(root, "header", revMajor="1", revMinor="7",
+    head = etree.SubElement(root, "header", revMajor="1", revMinor=str(opts.opendrive_minor),
                             name=name or f"{g.class_id}/{g.sample}", version="1",
                             north=_f(pts[:, 1].max()), south=_f(pts[:, 1].min()),
                             east=_f(pts[:, 0].max()), west=_f(pts[:, 0].min()), vendor="flyover")

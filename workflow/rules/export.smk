@@ -1,6 +1,6 @@
 # Step 5: geometry.json → OpenDRIVE (.xodr, plan.png) → SUMO network; validation table.
 rule export_xodr:
-    """One interchange: geometry.json → interchange.xodr (OpenDRIVE 1.7) and plan.png."""
+    """One interchange: geometry.json → interchange.xodr (OpenDRIVE 1.8) and plan.png."""
     input:
         geometry="results/interchanges/{class_id}/{sample}/geometry.json",
     output:
