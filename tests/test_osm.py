@@ -388,3 +388,16 @@ def test_keep_exits_keeps_links_to_ordinary_roads(tmp_path):
     x = next(r for r in t.roads if r.startswith("X"))
     assert "Main Street" in t.graph.nodes[x]["expressway"]
     assert [d["label"].value for _, _, d in t.graph.in_edges(x, data=True)] == ["In-M"]
+
+
+def test_a_ramp_merged_into_keeps_its_node_when_its_way_goes_on(tmp_path):
+    ramps = dict(J1_RAMPS)
+    r3 = ramps.pop("r3a") + ramps.pop("r3b")[1:]  # one OSM way through the merge point
+    t = only(write_osm(tmp_path / "j1w.osm", cross_roads("R 1", "S 1") + [way(p) for p in [*ramps.values(), r3]]))
+    e = [("R1", "r1a", "Out-R"), ("r1a", "r1b", "Out-R"), ("r1a", "r2", "Out-L"), ("r1b", "R3", "In-R"),
+         ("r2", "r3", "In-L"), ("R2", "r3", "Out-R"), ("r3", "R4", "In-R"), ("R2", "r4", "Out-R"),
+         ("r4", "R3", "In-R")]
+    expected = Topology.build("j1w", [Road("R1", "R"), Road("R2", "R"), Road("R3", "S"), Road("R4", "S")],
+                              [Ramp(r) for r in ("r1a", "r1b", "r2", "r3", "r4")],
+                              [Connection(u, v, Label(lab)) for u, v, lab in e])
+    assert t.n_ramps == 5 and class_id(t) == class_id(expected)

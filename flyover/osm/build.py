@@ -20,8 +20,10 @@ Steps (each survives messy data with a logged reason):
    parent's direction of travel (right-hand traffic). A carriageway that ends
    into links: the link on the left is ``Out-M``, others ``Out-R``; one that
    begins from links: the left one ``In-M``, others ``In-R``. A ramp that
-   splits becomes three ramp nodes (``Out-L``/``Out-R``); ramps that merge
-   feed a new ramp node (``In-L``/``In-R``).
+   splits becomes three ramp nodes (``Out-L``/``Out-R``). A ramp that another
+   merges into keeps its node when its OSM way goes on through the merge (the
+   merging ramp gets ``In-L``/``In-R``); ramps that all end at a merge feed a
+   new ramp node (``In-L``/``In-R``), as in the catalog's stack.
 7. **Interchanges.** Link components joining ≥ 2 corridors (by ``ref``,
    falling back to geometry), clustered when they share two corridors and lie
    within ``cluster_distance_m``; two interchanges sharing one carriageway stay
@@ -359,6 +361,7 @@ class _Builder:
             self.starts[s.start].append(s)
         self.groups: list[_RoadGroup] = []
         self.group_of: dict[int, int] = {}
+        self.continuations: list[tuple[int, int]] = []  # (ramp, its continuation past a merge)
         self._group_roads()
 
     # -- carriageways -----------------------------------------------------
@@ -536,6 +539,15 @@ class _Builder:
             base = lo[0] if len(lo) == 1 else None
             d_in = _unit(self._probe_out(base) - p) if base is not None else \
                 _unit(np.mean([_unit(p - self._probe_in(s)) for s in li], axis=0))
+            main = [s for s in li if base is not None and s.ways[-1] == base.ways[0]]
+            if len(main) == 1:  # a ramp merged into: its way goes on, it keeps its node
+                self.continuations.append((main[0].idx, base.idx))
+                ref = lateral_in(d_in, main[0])
+                for s in li:
+                    if s is not main[0]:
+                        side = "left" if lateral_in(d_in, s) > ref else "right"
+                        edges.append((("ramp", s.idx), child, Label.of(False, side), n))
+                return edges
             ranked = sorted(li, key=lambda s: -lateral_in(d_in, s))
             for k, s in enumerate(ranked):
                 edges.append((("ramp", s.idx), child, Label.IN_L if k == 0 else Label.IN_R, n))
@@ -583,6 +595,28 @@ def _stem_merges(nw: _Network, b: _Builder, edges: list) -> list:
     return out
 
 
+def _join_continuations(b: _Builder, edges: list) -> list:
+    """A ramp merged into keeps one node: join it with its stretch past the merge."""
+    rep: dict[int, int] = {}
+
+    def find(i):
+        while i in rep:
+            i = rep[i]
+        return i
+
+    for main, nxt in b.continuations:
+        m, tail = b.st[find(main)], b.st[nxt]
+        m.nodes = m.nodes + tail.nodes[1:]
+        m.xy = np.concatenate([m.xy, tail.xy[1:]])
+        m.ways = m.ways + [w for k, w in enumerate(tail.ways) if k or w != m.ways[-1]]
+        rep[nxt] = m.idx
+
+    def key(k):
+        return ("ramp", find(k[1])) if k[0] == "ramp" else k
+
+    return [(key(u), key(v), lab, n) for u, v, lab, n in edges]
+
+
 def _exit_edges(nw: _Network, b: _Builder) -> list:
     """With ``keep_exits``: a link ending (beginning) off the network ends in (begins from)
     an ordinary road of its own, ``In-M`` (``Out-M``)."""
@@ -618,6 +652,7 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     edges = _stem_merges(nw, b, edges)
     if options.keep_exits:
         edges += _exit_edges(nw, b)
+    edges = _join_continuations(b, edges)
     ramp_keys = sorted({k for e in edges for k in e[:2] if k[0] not in _ROAD_KEYS}, key=str)
     pairs = [(e[0], e[1]) for e in edges if e[0][0] not in _ROAD_KEYS and e[1][0] not in _ROAD_KEYS]
     comps = _components(ramp_keys, pairs)
