@@ -10,6 +10,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/topology.smk"
+include: "workflow/rules/sampling.smk"
 include: "workflow/rules/geometry.smk"
 include: "workflow/rules/export.smk"
 
@@ -21,4 +22,5 @@ rule all:
         class_topology_outputs,
         "results/validation.parquet",
         "results/geometry.parquet",
+        "results/coverage.parquet",
     default_target: True

@@ -63,6 +63,18 @@ def class_topology_outputs(wildcards):
     )
 
 
+# -- sampling (step 3) --
+
+def class_feature_tables(wildcards):
+    """Every class's feature sets (results/features/{class_id}.parquet)."""
+    return expand("results/features/{class_id}.parquet", class_id=class_ids())
+
+
+def class_coverage_rows(wildcards):
+    """Every class's row of coverage.parquet, kept per class so one class reruns alone."""
+    return expand("results/coverage/{class_id}.parquet", class_id=class_ids())
+
+
 # -- export (step 5) --
 
 def exported_interchanges():

@@ -1,0 +1,277 @@
+"""The feature model of a topology: its parameters, their domains, forbidden combinations.
+
+A **regulation profile** (config ``sampling.profiles.<name>``) gives, per node
+kind, the features to sample and their values, and the combinations design
+rules forbid. The paper's profile (FLYOVER §III-C, from China's interchange
+design rules) is the default ``china``::
+
+    china:
+      road: {lanes: [3, 4, 5]}
+      ramp: {radius_m: [.inf, 280, 210, 150, 100, 60, 40, 30], slope_pct: [1, 2, 3, 4, 5]}
+      forbid:
+        # on one element: no 30-40 m loop on a 5 % grade
+        - elements: [{kind: ramp, radius_m: [30, 40], slope_pct: 5}]
+        # across two elements joined by an edge (first -> second, direction of travel)
+        - where: connected
+          elements: [{kind: road, lanes: 5}, {kind: ramp, radius_m: 30}]
+
+A rule with one element applies to every element of that kind; with two, to
+every ordered pair of distinct elements of those kinds, joined by an edge
+(``where: connected``, the default) or not (``where: any``).
+
+For a topology, every (element, feature) is one parameter of the covering
+array, roads first, then ramps, each in id order.
+
+Examples
+--------
+>>> from flyover.topology.catalog import catalog_topologies
+>>> model = feature_model(catalog_topologies()["j1"], default_profile())
+>>> len(model.parameters), model.levels[:5]
+(12, (3, 3, 3, 3, 8))
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable, Mapping
+
+from flyover.errors import ConfigError
+from flyover.sampling.constraints import Forbidden
+from flyover.topology.model import Kind, Topology
+
+__all__ = ["Feature", "Relation", "ElementCondition", "ForbidRule", "Profile", "Parameter",
+           "FeatureModel", "feature_model", "profile_from_dict", "profile_from_config",
+           "default_profile", "DEFAULT_PROFILE"]
+
+
+class Feature(str, enum.Enum):
+    """A geometric feature; the value is its column in ``features/{class_id}.parquet``."""
+
+    LANES = "lanes"
+    RADIUS_M = "radius_m"
+    SLOPE_PCT = "slope_pct"
+
+
+class Relation(str, enum.Enum):
+    """How the two elements of a forbidden combination relate."""
+
+    CONNECTED = "connected"  # an edge first -> second
+    ANY = "any"              # any two distinct elements
+
+
+@dataclass(frozen=True)
+class ElementCondition:
+    """One element of a forbidden combination: its kind and the values it must hold."""
+
+    kind: Kind
+    values: tuple[tuple[Feature, frozenset[float]], ...]
+
+
+@dataclass(frozen=True)
+class ForbidRule:
+    """A forbidden combination of feature values on one element or two related ones."""
+
+    elements: tuple[ElementCondition, ...]
+    where: Relation = Relation.CONNECTED
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A regulation profile: per kind, the sampled features and their values; forbidden rules."""
+
+    name: str
+    domains: tuple[tuple[Kind, tuple[tuple[Feature, tuple[float, ...]], ...]], ...]
+    forbid: tuple[ForbidRule, ...] = ()
+
+    def domain(self, kind: Kind) -> dict[Feature, tuple[float, ...]]:
+        """Feature → values for elements of ``kind`` (empty if it samples none)."""
+        return dict(dict(self.domains).get(kind, ()))
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One column of the covering array: a feature of one element and its values."""
+
+    element: str
+    kind: Kind
+    feature: Feature
+    values: tuple[float, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class FeatureModel:
+    """The parameters of one topology under a profile, and the forbidden combinations."""
+
+    topology: Topology
+    profile: Profile
+    parameters: tuple[Parameter, ...]
+    forbidden: tuple[Forbidden, ...]
+
+    @property
+    def levels(self) -> tuple[int, ...]:
+        return tuple(len(p.values) for p in self.parameters)
+
+    def elements(self) -> list[tuple[str, Kind]]:
+        """Every road, then every ramp, in id order."""
+        t = self.topology
+        return [(r, Kind.ROAD) for r in t.roads] + [(r, Kind.RAMP) for r in t.ramps]
+
+
+#: the paper's domains (FLYOVER §III-C, from China's interchange design rules)
+DEFAULT_PROFILE: dict[str, Any] = {
+    "road": {"lanes": [3, 4, 5]},
+    "ramp": {"radius_m": [math.inf, 280, 210, 150, 100, 60, 40, 30], "slope_pct": [1, 2, 3, 4, 5]},
+    "forbid": [],
+}
+
+
+def _number(value: Any, where: str, source: str | None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, str) and value.strip().lower() in ("inf", ".inf", "infinity"):
+            return math.inf
+        raise ConfigError(f"expected a number, got {value!r}", source=source, element=where)
+    return float(value)
+
+
+def profile_from_dict(name: str, doc: Mapping[str, Any], source: str | None = None) -> Profile:
+    """Build a :class:`Profile` from its config mapping (format in the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Naming the key at fault: unknown kind or feature, a repeated value, a
+        forbidden value outside the domain, a rule of more than two elements.
+    """
+    at = f"sampling.profiles.{name}"
+    domains = []
+    for kind in Kind:
+        features = doc.get(kind.value) or {}
+        entries = []
+        for fname, values in features.items():
+            where = f"{at}.{kind.value}.{fname}"
+            try:
+                feature = Feature(fname)
+            except ValueError:
+                raise ConfigError(f"unknown feature (expected one of {', '.join(f.value for f in Feature)})",
+                                  source=source, element=where) from None
+            vals = tuple(_number(v, where, source) for v in values)
+            if not vals or len(set(vals)) != len(vals):
+                raise ConfigError("a domain needs distinct values", source=source, element=where)
+            entries.append((feature, vals))
+        if entries:
+            domains.append((kind, tuple(entries)))
+    unknown = set(doc) - {k.value for k in Kind} - {"forbid", "description"}
+    if unknown:
+        raise ConfigError(f"unknown key(s) {', '.join(sorted(unknown))}", source=source, element=at)
+    if not domains:
+        raise ConfigError("a profile needs at least one feature", source=source, element=at)
+    profile = Profile(name, tuple(domains))
+    rules = tuple(_rule(r, profile, f"{at}.forbid[{i}]", source) for i, r in enumerate(doc.get("forbid") or []))
+    return Profile(name, tuple(domains), rules)
+
+
+def _rule(doc: Any, profile: Profile, at: str, source: str | None) -> ForbidRule:
+    if not isinstance(doc, Mapping) or not isinstance(doc.get("elements"), list):
+        raise ConfigError("a forbidden combination is {elements: [...], where: connected|any}",
+                          source=source, element=at)
+    items = doc["elements"]
+    if not 1 <= len(items) <= 2:
+        raise ConfigError("a forbidden combination names one or two elements", source=source, element=at)
+    try:
+        where = Relation(doc.get("where", Relation.CONNECTED.value))
+    except ValueError:
+        raise ConfigError("where must be connected or any", source=source, element=f"{at}.where") from None
+    conds = []
+    for j, item in enumerate(items):
+        el = f"{at}.elements[{j}]"
+        try:
+            kind = Kind(item.get("kind"))
+        except (AttributeError, ValueError):
+            raise ConfigError("each element needs kind: road or ramp", source=source, element=el) from None
+        domain = profile.domain(kind)
+        values = []
+        for fname, vs in item.items():
+            if fname == "kind":
+                continue
+            try:
+                feature = Feature(fname)
+            except ValueError:
+                raise ConfigError(f"unknown feature {fname!r}", source=source, element=el) from None
+            if feature not in domain:
+                raise ConfigError(f"profile {profile.name} samples no {fname} for a {kind.value}",
+                                  source=source, element=f"{el}.{fname}")
+            chosen = frozenset(_number(v, f"{el}.{fname}", source) for v in (vs if isinstance(vs, list) else [vs]))
+            outside = sorted(chosen - set(domain[feature]))
+            if outside:
+                raise ConfigError(f"value(s) {', '.join(map(str, outside))} not in the {fname} domain",
+                                  source=source, element=f"{el}.{fname}")
+            values.append((feature, chosen))
+        if not values:
+            raise ConfigError("an element needs at least one feature value", source=source, element=el)
+        conds.append(ElementCondition(kind, tuple(sorted(values))))
+    return ForbidRule(tuple(conds), where)
+
+
+def default_profile() -> Profile:
+    """The paper's profile (``china``)."""
+    return profile_from_dict("china", DEFAULT_PROFILE)
+
+
+def profile_from_config(config: Mapping[str, Any], name: str | None = None,
+                        source: str | None = None) -> Profile:
+    """The profile ``name`` (default: ``sampling.profile``) of a validated config."""
+    sampling = config.get("sampling") or {}
+    name = name or sampling.get("profile", "china")
+    profiles = sampling.get("profiles") or {}
+    if name not in profiles:
+        if name == "china":
+            return default_profile()
+        raise ConfigError(f"unknown profile {name!r} (known: {', '.join(sorted(profiles)) or 'none'})",
+                          source=source, element="sampling.profile")
+    return profile_from_dict(name, profiles[name], source)
+
+
+def feature_model(topology: Topology, profile: Profile,
+                  extra: Iterable[ForbidRule] = ()) -> FeatureModel:
+    """The parameters of ``topology`` under ``profile``.
+
+    Parameters
+    ----------
+    topology
+        The class's topology.
+    profile
+        Domains and forbidden combinations.
+    extra
+        More forbidden combinations (e.g. ones a later stage found infeasible).
+    """
+    model = FeatureModel(topology, profile, (), ())
+    params, index = [], {}
+    for element, kind in model.elements():
+        for feature, values in profile.domain(kind).items():
+            index[element, feature] = len(params)
+            params.append(Parameter(element, kind, feature, values))
+    forbidden = []
+    for rule in (*profile.forbid, *extra):
+        for elements in _matches(topology, model.elements(), rule):
+            cells: dict[int, set[int]] = {}
+            for element, cond in zip(elements, rule.elements):
+                for feature, chosen in cond.values:
+                    p = index[element, feature]
+                    cells[p] = {i for i, v in enumerate(params[p].values) if v in chosen}
+            forbidden.append(Forbidden.of(cells))
+    return FeatureModel(topology, profile, tuple(params), tuple(dict.fromkeys(forbidden)))
+
+
+def _matches(topology: Topology, elements: list[tuple[str, Kind]], rule: ForbidRule):
+    """The element tuples a rule applies to."""
+    first = [e for e, k in elements if k is rule.elements[0].kind]
+    if len(rule.elements) == 1:
+        yield from ((e,) for e in first)
+        return
+    second = [e for e, k in elements if k is rule.elements[1].kind]
+    for a in first:
+        for b in second:
+            if a != b and (rule.where is Relation.ANY or topology.graph.has_edge(a, b)):
+                yield a, b

@@ -1,0 +1,50 @@
+# Step 3: per class, the feature sets to build = rows of a small t-way covering array
+# over its roads' and ramps' features (flyover/sampling).
+
+# Bump when the algorithm changes: params are rerun triggers.
+SAMPLING_VERSION = 1
+
+
+rule sample_class:
+    """One class's topology → its feature sets and their coverage."""
+    input:
+        topology="results/classes/{class_id}/topology.graphml",
+    output:
+        features="results/features/{class_id}.parquet",
+        coverage="results/coverage/{class_id}.parquet",
+    log:
+        "logs/sampling/{class_id}.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=SAMPLING_VERSION,
+        sampling=config["sampling"],
+        seed=config["seed"],
+    threads: 1
+    benchmark:
+        "logs/benchmarks/sampling/{class_id}.tsv"
+    script:
+        "../scripts/sample_class.py"
+
+
+rule coverage_table:
+    """Every class's coverage row → results/coverage.parquet."""
+    input:
+        class_coverage_rows,
+    output:
+        table="results/coverage.parquet",
+    log:
+        "logs/coverage.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=SAMPLING_VERSION,
+    script:
+        "../scripts/sample_coverage.py"
+
+
+rule sampling:
+    """Target: the sampling stage only (feature sets of every class, coverage table)."""
+    input:
+        "results/coverage.parquet",
+        class_feature_tables,

@@ -1,0 +1,22 @@
+"""Rule sample_class: a class's topology → features/{class_id}.parquet + its coverage row."""
+import logging
+
+from flyover.sampling.sample import COVERAGE_SCHEMA, FEATURES_SCHEMA, sample_topology
+from flyover.sampling.settings import settings_from_config
+from flyover.topology.io import read_graphml
+from flyover.topology.tables import write_parquet
+from flyover.workflow_log import setup_logging
+
+setup_logging(snakemake.log[0])
+class_id = snakemake.wildcards.class_id
+settings = settings_from_config({"sampling": snakemake.params.sampling})
+sampling = sample_topology(read_graphml(snakemake.input.topology), settings.profile,
+                           t=settings.t, seed=snakemake.params.seed, class_id=class_id,
+                           budget=settings.budget)
+write_parquet(sampling.feature_rows(), FEATURES_SCHEMA, snakemake.output.features)
+write_parquet([sampling.coverage_row()], COVERAGE_SCHEMA, snakemake.output.coverage)
+c = sampling.coverage
+logging.getLogger("sampling").info(
+    "%s: t=%d, %d parameters, %d rows (lower bound %d), %d/%d tuples covered; %s",
+    class_id, c.t, c.n_params, c.rows, c.lower_bound, c.tuples_covered, c.tuples_total,
+    sampling.array.construction)
