@@ -160,8 +160,11 @@ class _Junction:
     id: int
     event: _Event | None
     pieces: dict[str, _Piece] = field(default_factory=dict)  # "parent"/"ramp" -> piece
-    #: a fork (ramps split at a ramp's free end) or join (ramps form a ramp at its free start)
+    #: a fork (ramps leave the end of their parent) or a join (they form its start)
     group: tuple[_Event, ...] = ()
+    forking: bool = True
+    #: the parent's end is free (a stub ramp): the branches lie on its lanes
+    free: bool = False
 
 
 def _rising(w: float, T: float) -> Cubic:
@@ -259,24 +262,31 @@ def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportO
     free_end, free_start = _free_ends(g)
     junctions: list[_Junction] = []
     cuts: dict[str, list[tuple[float, float, _Junction, str]]] = {k: [] for k in els}
-    for stub in sorted(free_end | free_start):
-        forking = stub in free_end
-        group = tuple(sorted((e for e in events if e.parent == stub and e.out == forking),
-                             key=lambda e: e.ramp))
-        if not group:
-            raise ExportError("free end without ramps attached to it", element=stub)
-        j = _Junction(1000 + len(junctions), None, group=group)
-        junctions.append(j)
-        for e in group:
-            ramp = els[e.ramp]
-            other = [x.s for x in events if x.parent == e.ramp and x.side != "M"]
-            ramp_s = 0.0 if e.out else ramp.length
-            lc = min([opts.connecting_length_m, ramp.length / 3]
-                     + [abs(x - ramp_s) / 3 for x in other])
-            span = (0.0, lc) if e.out else (ramp.length - lc, ramp.length)
-            cuts[e.ramp].append((*span, j, f"ramp:{e.ramp}"))
+    for pid in sorted(els):
+        el = els[pid]
+        for forking in (True, False):
+            free = pid in (free_end if forking else free_start)
+            at_end = [e for e in events if e.parent == pid and e.out == forking
+                      and (free or (e.s >= el.length - 0.5 if forking else e.s <= 0.5))]
+            if free and not at_end:
+                raise ExportError(f"free {'end' if forking else 'start'} without ramps attached",
+                                  element=pid)
+            if not free and not (len(at_end) > 1 or (at_end and at_end[0].side != "M")):
+                continue
+            group = tuple(sorted(at_end, key=lambda e: e.ramp))
+            j = _Junction(1000 + len(junctions), None, group=group, forking=forking, free=free)
+            junctions.append(j)
+            for e in group:
+                ramp = els[e.ramp]
+                other = [x.s for x in events if x.parent == e.ramp and x.side != "M"]
+                ramp_s = 0.0 if e.out else ramp.length
+                lc = min([opts.connecting_length_m, ramp.length / 3]
+                         + [abs(x - ramp_s) / 3 for x in other if abs(x - ramp_s) > 1e-6])
+                span = (0.0, lc) if e.out else (ramp.length - lc, ramp.length)
+                cuts[e.ramp].append((*span, j, f"ramp:{e.ramp}"))
+    grouped = {(e.parent, e.ramp, e.out) for j in junctions for e in j.group}
     for e in sorted(events, key=lambda e: (e.parent, e.s, e.ramp)):
-        if e.side == "M" or (e.parent in free_end and e.out) or (e.parent in free_start and not e.out):
+        if e.side == "M" or (e.parent, e.ramp, e.out) in grouped:
             continue
         par, ramp = els[e.parent], els[e.ramp]
         same = sorted(x.s for x in events if x.parent == e.parent and x.side != "M")
@@ -315,21 +325,61 @@ def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportO
     return pieces, junctions
 
 
-def _link_fork(j: _Junction, pieces: dict[str, list[_Piece]]) -> None:
-    """Road links of a fork (ramps leave a ramp's free end) or join (they form a ramp's start)."""
+def _link_fork(j: _Junction, pieces: dict[str, list[_Piece]], els: dict[str, _Element]) -> None:
+    """Road links and lane regions of a fork (ramps leave their parent's end) or join."""
     stub = j.group[0].parent
+    par = els[stub]
+    end_piece = pieces[stub][-1] if j.forking else pieces[stub][0]
+    if end_piece.junction is not None:
+        raise ExportError("another junction too close to where ramps fork/join", element=stub)
+    sides = [e for e in j.group if e.side != "M"]
+    if not j.free and sides:
+        if len(sides) > 1:
+            raise ExportError("more than one ramp beside the straight-on one at a carriageway end",
+                              element=stub)
+        e = sides[0]
+        region = ("aux", e.side, els[e.ramp].lanes, els[e.ramp].width)
+        if j.forking:
+            end_piece.end_region = region
+        else:
+            end_piece.start_region = region
     for e in j.group:
         rp = j.pieces[f"ramp:{e.ramp}"]
         rlist = pieces[e.ramp]
         ri = rlist.index(rp)
+        if e.side == "M":
+            if j.forking:
+                rp.start_region = ("trans", par.lanes, par.width)
+            else:
+                rp.end_region = ("trans", par.lanes, par.width)
         if e.out:
-            up, body = pieces[stub][-1], rlist[ri + 1]
-            up.succ, body.pred = ("junction", j.id), ("junction", j.id)
-            rp.pred, rp.succ = ("road", up.road_id, "end"), ("road", body.road_id, "start")
+            body = rlist[ri + 1]
+            end_piece.succ, body.pred = ("junction", j.id), ("junction", j.id)
+            rp.pred, rp.succ = ("road", end_piece.road_id, "end"), ("road", body.road_id, "start")
         else:
-            down, body = pieces[stub][0], rlist[ri - 1]
-            down.pred, body.succ = ("junction", j.id), ("junction", j.id)
-            rp.pred, rp.succ = ("road", body.road_id, "end"), ("road", down.road_id, "start")
+            body = rlist[ri - 1]
+            end_piece.pred, body.succ = ("junction", j.id), ("junction", j.id)
+            rp.pred, rp.succ = ("road", body.road_id, "end"), ("road", end_piece.road_id, "start")
+
+
+def _branch_map(j: _Junction, e: _Event, els: dict[str, _Element], inverse: bool = False):
+    """Lane keys at the parent's end → lane keys of one branch of a fork (inverse: join)."""
+    stub, ramp = els[e.parent], els[e.ramp]
+    if j.free:
+        return _fork_map(stub, ramp, e.side, inverse)
+    right_side = any(x.side == "R" for x in j.group)
+    if e.side == "M":
+        pairs = {("b", i): (("b", i) if i <= ramp.lanes else ("x", i))
+                 for i in range(1, max(stub.lanes, ramp.lanes) + 1)}
+        if not right_side:
+            pairs[("sh",)] = ("sh",)
+    else:
+        pairs = {("aux", k): ("b", k) for k in range(1, ramp.lanes + 1)}
+        if e.side == "R":
+            pairs[("sh",)] = ("sh",)
+    if inverse:
+        pairs = {v: k for k, v in pairs.items()}
+    return lambda k: pairs.get(k)
 
 
 def _fork_map(stub: _Element, ramp: _Element, side: str, inverse: bool = False):
@@ -418,7 +468,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
     # regions (aux lanes, width transitions) and links
     for j in junctions:
         if j.group:
-            _link_fork(j, pieces)
+            _link_fork(j, pieces, els)
             continue
         e = j.event
         par, ramp = els[e.parent], els[e.ramp]
@@ -441,8 +491,9 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
             down.pred = ("junction", j.id)
             pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
             rp.pred, rp.succ = ("road", rbody.road_id, "end"), ("road", down.road_id, "start")
+    grouped = {(e.parent, e.ramp, e.out) for j in junctions for e in j.group}
     for e in _events(g):
-        if e.side != "M":
+        if e.side != "M" or (e.parent, e.ramp, e.out) in grouped:
             continue
         par, ramp = els[e.parent], els[e.ramp]
         if e.out:  # parent ends, ramp begins
@@ -461,6 +512,9 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         el = els[k]
         for p in plist:
             L = p.s1 - p.s0
+            if p.junction is not None and (p.start_region or p.end_region):
+                layouts[p.road_id] = _lanes_layout(el, p, L, L, sh)
+                continue
             if p.junction is not None:
                 layouts[p.road_id] = [(0.0, (_const(0.0), [(("b", i), _const(el.width))
                                                           for i in range(1, el.lanes + 1)]
@@ -492,24 +546,22 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
     same = lambda k: k if k[0] in ("b", "sh") else None  # noqa: E731
     for j in junctions:
         if j.group:
-            stub = j.group[0].parent
             for e in j.group:
                 rp = j.pieces[f"ramp:{e.ramp}"]
-                geo = _fork_map(els[stub], els[e.ramp], e.side)
                 if e.out:
                     up = by_id[rp.pred[1]]
-                    links = keymap(ids(up.road_id, -1), ids(rp.road_id, 0), geo)
+                    links = keymap(ids(up.road_id, -1), ids(rp.road_id, 0), _branch_map(j, e, els))
                     conn_links.append((j.id, up.road_id, rp.road_id, links))
                     pred_links[rp.road_id] = dict((b, a) for a, b in links)
-                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, 0),
+                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, -1),
                                                          ids(rp.succ[1], 0), same))
                 else:
                     body, down = by_id[rp.pred[1]], by_id[rp.succ[1]]
                     links = keymap(ids(body.road_id, -1), ids(rp.road_id, 0), same)
                     conn_links.append((j.id, body.road_id, rp.road_id, links))
                     pred_links[rp.road_id] = dict((b, a) for a, b in links)
-                    inv = _fork_map(els[stub], els[e.ramp], e.side, inverse=True)
-                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, 0),
+                    inv = _branch_map(j, e, els, inverse=True)
+                    succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, -1),
                                                          ids(down.road_id, 0), inv))
             continue
         e = j.event
@@ -542,7 +594,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
             pred_links[pp.road_id] = dict((b, a) for a, b in conn_links[-2][3])
             pred_links[rp.road_id] = dict((b, a) for a, b in conn_links[-1][3])
     for e in _events(g):
-        if e.side != "M":
+        if e.side != "M" or (e.parent, e.ramp, e.out) in grouped:
             continue
         a, b = ((pieces[e.parent][-1], pieces[e.ramp][0]) if e.out
                 else (pieces[e.ramp][-1], pieces[e.parent][0]))
@@ -586,7 +638,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
             _write_road(root, el, p, layouts[p.road_id], pred_links.get(p.road_id, {}),
                         succ_links.get(p.road_id, {}), ids)
     for j in junctions:
-        jname = (f"{j.group[0].parent} {'fork' if j.group[0].out else 'join'}" if j.group
+        jname = (f"{j.group[0].parent} {'fork' if j.forking else 'join'}" if j.group
                  else f"{j.event.parent}/{j.event.ramp}")
         je = etree.SubElement(root, "junction", id=str(j.id), name=jname, type="default")
         cid = 0
