@@ -640,6 +640,11 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
 
     An interchange that breaks a model rule is logged and left out; the
     others are still returned.
+
+    Raises
+    ------
+    TopologyError
+        Every interchange found breaks a model rule (the first one's reason).
     """
     nw = _Network(net, options)
     nw.add_ways()
@@ -697,14 +702,17 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
             if d <= options.cluster_distance_m:
                 close.append((ci, cj))
     clusters = _components(multi, close)
-    out = []
+    out, failed = [], []
     for cl in clusters:
         cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
         try:
             out.append(_topology(nw, b, cl_edges))
         except TopologyError as exc:
             exc.located(nw.src)
+            failed.append(exc)
             log.warning("interchange rejected: %s", exc.one_line())
+    if failed and not out:  # nothing usable: the file is rejected with the first reason
+        raise failed[0]
     names = Counter(t.name for t in out)
     for t in out:
         if names[t.name] > 1:
