@@ -74,9 +74,9 @@ def sample_spline(ctrl: np.ndarray, m: int = 32) -> SplineSamples:
     """Sample every piece of ``ctrl`` ``(..., n, 4, 2)`` at ``m`` parameter values."""
     ctrl = np.asarray(ctrl, float)
     _, b, db, ddb = _basis(m)
-    p = np.einsum("mk,...kd->...md", b, ctrl)
-    d1 = np.einsum("mk,...kd->...md", db, ctrl)
-    d2 = np.einsum("mk,...kd->...md", ddb, ctrl)
+    p = np.matmul(b, ctrl)
+    d1 = np.matmul(db, ctrl)
+    d2 = np.matmul(ddb, ctrl)
     speed = np.hypot(d1[..., 0], d1[..., 1])
     cross = d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]
     kappa = cross / np.maximum(speed, 1e-9) ** 3

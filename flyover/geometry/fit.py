@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -142,7 +142,7 @@ class FitSettings:
 
     popsize: int = 8
     maxiter: int = 200
-    min_generations: int = 25
+    min_generations: int = 10
     tol_radius: float = 0.05
     tol_slope_pp: float = 0.2
     accept_radius: float = 0.02
@@ -307,7 +307,7 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
     if len(obstacles.points):
         flat = c.reshape(-1, 2)
         reach = hw + float(obstacles.half_width.max())
-        dist, idx = obstacles.tree.query(flat, k=min(8, len(obstacles.points)),
+        dist, idx = obstacles.tree.query(flat, k=min(4, len(obstacles.points)),
                                          distance_upper_bound=reach)
         dist, idx = dist.reshape(len(flat), -1), idx.reshape(len(flat), -1)
         found = np.isfinite(dist)
@@ -396,11 +396,13 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
         count[0] += x.shape[1]
         return f(x)
 
+    _, fine_terms = ramp_objective(spec, obstacles, replace(settings, samples=64))
+
     def good(xk: np.ndarray) -> bool:
-        t = terms(xk[:, None])
+        t = fine_terms(xk[:, None])
         return bool(np.abs(t["rad_err"][0]) < settings.accept_radius and t["shortfall"][0] == 0
                     and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0
-                    and t["excess"][0] < 0.05)
+                    and t["excess"][0] < 0.3)
 
     def stop(intermediate_result) -> bool:
         gen[0] += 1

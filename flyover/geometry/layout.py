@@ -74,6 +74,7 @@ class LayoutSettings:
     reach_m: float = 1500.0
     terminal_m: float = 120.0
     road_margin_m: float = 100.0
+    cd_clear_m: float = 350.0
     max_resamples: int = 3
     fit: FitSettings = field(default_factory=FitSettings)
 
@@ -180,7 +181,8 @@ def _terminal(topo: Topology, road: str) -> str | None:
     return None
 
 
-def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings) -> dict[str, _Road]:
+def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
+                  terminal_extra: float = 0.0) -> dict[str, _Road]:
     exps = topo.expressways
     terminal = {e: any(_terminal(topo, r) for r in rs) for e, rs in exps.items()}
     order = sorted(exps, key=lambda e: (terminal[e], e))
@@ -199,9 +201,9 @@ def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings) 
                 term = _terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
                 if term == "end":
-                    t_hi = -(other + st.terminal_m)
+                    t_hi = -(other + st.terminal_m + terminal_extra)
                 elif term == "start":
-                    t_lo = other + st.terminal_m
+                    t_lo = other + st.terminal_m + terminal_extra
                 n = lanes.get(r, st.default_lanes)
                 roads[r] = _Road(r, e, int(n), k, k * st.level_height_m, (float(o[0]), float(o[1])),
                                  float(_wrap(h)), t_lo, t_hi, half[e])
@@ -241,7 +243,10 @@ class _Builder:
                  features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
         self.topo, self.st, self.seed = topo, st, seed
         self.features = dict(features)
-        self.roads = _layout_roads(topo, lanes, st)
+        # a T's terminal is far enough out for a ramp to climb one level there
+        slopes = [f.slope_pct for f in features.values() if f.slope_pct > 0]
+        extra = st.level_height_m / (min(slopes) / 100) + st.fit.transition_m if slopes else 0.0
+        self.roads = _layout_roads(topo, lanes, st, extra)
         self.g = topo.graph
         self.fits: dict[str, RampFit] = {}
         self.rails: dict[str, dict] = {}  # fitted ramp → stations
@@ -269,7 +274,7 @@ class _Builder:
 
     def _is_loop(self, ramp: str, raw: float) -> bool:
         start, end = _ends(self.topo, ramp)
-        if start is None or end is None or start[0] not in self.roads:
+        if start is None or end is None:
             return False
         if start[1] is not Label.OUT_R or end[1] is Label.IN_M:
             return False
@@ -290,6 +295,8 @@ class _Builder:
         other = max([x.half_width for x in self.roads.values() if x.expressway != r.expressway]
                     or [0.0])
         tz = other + st.crossing_margin_m
+        if self._same_road(ramp):  # collector-distributor: leave room for what attaches to it
+            tz += st.cd_clear_m
         if label is Label.OUT_M or (pos is not None and pos >= 0.99 and np.isfinite(r.t_hi)):
             lo = hi = r.t_hi
         elif label is Label.IN_M or (pos is not None and pos <= 0.01 and np.isfinite(r.t_lo)):
@@ -310,6 +317,10 @@ class _Builder:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
 
+    def _same_road(self, ramp: str) -> bool:
+        start, end = _ends(self.topo, ramp)
+        return bool(start and end and start[0] == end[0] and start[0] in self.roads)
+
     def _ramp_rail(self, parent: str, label: Label, is_start: bool, width: float) -> Rail:
         st = self.rails[parent]
         length = st["s"][-1]
@@ -323,10 +334,15 @@ class _Builder:
             lo = hi = length
         elif not is_start and p_start is None:
             lo = hi = 0.0
-        elif is_start:
-            lo, hi = 0.15 * length, 0.6 * length
         else:
-            lo, hi = 0.4 * length, 0.85 * length
+            key = (parent, self._current) if is_start else (self._current, parent)
+            pos = self.g.edges[key].get("pos")
+            if pos is not None:
+                lo, hi = max(0.05, pos - 0.15) * length, min(0.95, pos + 0.15) * length
+            elif is_start:
+                lo, hi = 0.15 * length, 0.6 * length
+            else:
+                lo, hi = 0.4 * length, 0.85 * length
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
@@ -341,6 +357,7 @@ class _Builder:
         return float(np.mean(zs)) if zs else 0.0
 
     def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
+        self._current = ramp
         start, end = _ends(self.topo, ramp)
         width = self.width[ramp]
         st = self.st
@@ -369,16 +386,12 @@ class _Builder:
             raw = _wrap(h_b - h_a)
             loop = self._is_loop(ramp, raw)
         turn = raw - 2 * np.pi if loop else raw
-        pieces = 3 if abs(turn) > 2.2 else 2
+        pieces = 2 if (abs(turn) > 2.2 or abs(turn) < 0.3) else 1
         a = self._rail(ramp, start, True, loop, width) if start else None
         b = self._rail(ramp, end, False, loop, width) if end else None
         z_a = self._end_z(start) if start else free.z
         z_b = self._end_z(end) if end else free.z
         crest = None
-        direct_left = (not loop and start is not None and end is not None and raw > 1.0)
-        if direct_left:
-            need = max(z_a, z_b) + st.fit.clearance_m - 1e-6
-            crest = next((z for z in st.levels_m if z >= need), st.levels_m[-1])
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest)
 
@@ -472,19 +485,24 @@ class _Builder:
 
 
 def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
+    """Fit; while the ramp meets something at its level, lift its crest one level."""
     st = b.st
     evals, secs = 0, 0.0
     obst = b.obstacles()
+    tried = []
     while True:
         fit = fit_ramp(spec, obst, st.fit, seed=seed)
         evals += fit.evaluations
         secs += fit.seconds
+        tried.append(fit)
         if fit.conflicts == 0:
-            return fit, evals, secs
+            break
         higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6]
         if not higher:
-            return fit, evals, secs
+            break
         spec = replace(spec, z_crest=higher[0])
+    best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
+    return best, evals, secs
 
 
 def build_interchange(topology: Topology, lanes: Mapping[str, int],

@@ -1,0 +1,118 @@
+"""Benchmark of the geometry stage on the catalog city (one core).
+
+For every catalog design, ``--samples`` feature sets are drawn (seeded) from
+the configured sampling domains (config ``sampling.profiles``), or read from
+``results/features/{class_id}.parquet`` with ``--from-results``. Each is built
+into a concrete interchange (layout + DE ramps + resampling). Prints:
+
+* per class: ramps, within tolerance on the first try, resampled, within
+  tolerance at the end, recorded infeasible, with a same-level conflict;
+* median / p95 seconds per interchange and per ramp (vectorised DE);
+* the same per ramp for scipy's plain (non-vectorised) DE on the same ramps,
+  with the same stopping rule, i.e. at equal accuracy.
+
+Run: ``OMP_NUM_THREADS=1 .venv/bin/python benchmarks/geometry.py --samples 3``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from dataclasses import replace
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from flyover.config import load_config  # noqa: E402
+from flyover.geometry.fit import fit_ramp  # noqa: E402
+from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
+from flyover.geometry.tables import (  # noqa: E402
+    build_sample, domain_resampler, geometry_rows, read_feature_sets, sample_seed, summary,
+)
+from flyover.topology.canonical import class_id as class_id_of  # noqa: E402
+from flyover.topology.catalog import catalog_topologies  # noqa: E402
+
+
+def drawn_feature_sets(topology, profile, n, seed):
+    rng = np.random.default_rng(seed)
+    out = {}
+    for k in range(n):
+        lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
+        ramps = {r: RampFeatures(float(rng.choice(profile["ramp"]["radius_m"])),
+                                 float(rng.choice(profile["ramp"]["slope_pct"])))
+                 for r in topology.ramps}
+        out[k] = (lanes, ramps)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=3)
+    ap.add_argument("--designs", nargs="*", default=None)
+    ap.add_argument("--plain-ramps", type=int, default=12,
+                    help="ramps re-fitted with the plain scipy DE for comparison")
+    ap.add_argument("--from-results", action="store_true")
+    args = ap.parse_args()
+    cfg = load_config("config/config.yaml")
+    settings = LayoutSettings.from_config(cfg["geometry"])
+    profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
+    seed = int(cfg["seed"])
+    rows, per_ic, names, fits = [], [], {}, []
+    for name, topo in catalog_topologies().items():
+        if args.designs and name not in args.designs:
+            continue
+        cid = class_id_of(topo)
+        names[cid] = name
+        if args.from_results:
+            sets = read_feature_sets(f"results/features/{cid}.parquet")
+        else:
+            sets = drawn_feature_sets(topo, profile, args.samples, seed)
+        for sample, fs in sorted(sets.items())[: args.samples]:
+            t0 = time.process_time()
+            ic = build_sample(topo, fs, class_id=cid, sample=sample, seed=seed, settings=settings,
+                              resampler=domain_resampler(sets, sample_seed(seed, cid, sample)))
+            per_ic.append(time.process_time() - t0)
+            rows += geometry_rows(ic)
+            fits += [o.fit for o in ic.outcomes]
+            print(f"{name} sample {sample}: {sum(o.fit.ok for o in ic.outcomes)}/"
+                  f"{len(ic.outcomes)} ramps ok, {per_ic[-1]:.2f} s", flush=True)
+    print("\nclass (design)                 ramps  first-try-ok  resampled  ok  infeasible  conflict")
+    tot = dict(ramps=0, first_try_ok=0, resampled=0, ok=0, infeasible=0, conflicts=0)
+    for s in summary(rows):
+        print(f"{s['class_id']} ({names[s['class_id']]:<17}) {s['ramps']:5d}  {s['first_try_ok']:12d}"
+              f"  {s['resampled']:9d}  {s['ok']:3d}  {s['infeasible']:10d}  {s['conflicts']:8d}")
+        for k in tot:
+            tot[k] += s[k]
+    print(f"{'total':<31}{tot['ramps']:5d}  {tot['first_try_ok']:12d}  {tot['resampled']:9d}"
+          f"  {tot['ok']:3d}  {tot['infeasible']:10d}  {tot['conflicts']:8d}")
+    print(f"first try within tolerance: {100 * tot['first_try_ok'] / tot['ramps']:.1f} %; "
+          f"ok or recorded infeasible: "
+          f"{100 * sum(r['ok'] or bool(r['infeasible']) for r in rows) / len(rows):.1f} %")
+    ramp_s = np.array([f.seconds for f in fits])
+    print(f"\nper interchange (CPU s): median {np.median(per_ic):.3f}  p95 "
+          f"{np.percentile(per_ic, 95):.3f}  (n={len(per_ic)})")
+    print(f"per ramp fit, vectorised DE (s): median {np.median(ramp_s):.3f}  p95 "
+          f"{np.percentile(ramp_s, 95):.3f}  (n={len(ramp_s)})")
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(fits), size=min(args.plain_ramps, len(fits)), replace=False)
+    vec, plain, vec_ok, plain_ok = [], [], 0, 0
+    for i in pick:
+        f = fits[i]
+        obst = None
+        a = fit_ramp(f.spec, obst, settings.fit, seed=7)
+        b = fit_ramp(f.spec, obst, replace(settings.fit, vectorized=False), seed=7)
+        vec.append(a.seconds)
+        plain.append(b.seconds)
+        vec_ok += a.radius_ok and a.slope_ok
+        plain_ok += b.radius_ok and b.slope_ok
+    print(f"same {len(pick)} ramps alone, vectorised DE: median {np.median(vec):.3f} p95 "
+          f"{np.percentile(vec, 95):.3f} s, {vec_ok} within tolerance")
+    print(f"same {len(pick)} ramps alone, plain DE:      median {np.median(plain):.3f} p95 "
+          f"{np.percentile(plain, 95):.3f} s, {plain_ok} within tolerance")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,111 @@
+"""Ramp fitting: continuity, radius and slope targets, loops, flyovers, infeasible targets."""
+
+import math
+
+import numpy as np
+import pytest
+
+from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
+from flyover.geometry.fit import FitSettings, Obstacles, Rail, RampSpec, fit_ramp
+from flyover.geometry.profile import evaluate_polys, max_grade
+
+W = 4.0
+
+
+def _check_ends(fit):
+    """G1 at both ends: position < 1 cm, heading < 0.5°, height < 1 cm (measured on the curve)."""
+    ctrl = fit.ctrl
+    for rail, s, k, pose in ((fit.spec.start, fit.start_s, 0, fit.start_pose),
+                             (fit.spec.end, fit.end_s, -1, fit.end_pose)):
+        p, h, z = rail.at(np.array([s]))
+        end = ctrl[k, 0] if k == 0 else ctrl[k, 3]
+        tan = ctrl[k, 1] - ctrl[k, 0] if k == 0 else ctrl[k, 3] - ctrl[k, 2]
+        assert np.hypot(*(end - p[0])) < 0.01
+        dh = math.atan2(tan[1], tan[0]) - h[0]
+        assert abs((dh + math.pi) % (2 * math.pi) - math.pi) < math.radians(0.5)
+        zz, _ = evaluate_polys(fit.elevation, np.array([0.0 if k == 0 else fit.length_m]))
+        assert abs(zz[0] - z[0]) < 0.01
+    # joints: G1
+    for a, b in zip(ctrl[:-1], ctrl[1:]):
+        assert np.hypot(*(a[3] - b[0])) < 1e-9
+        ta, tb = a[3] - a[2], b[1] - b[0]
+        assert abs(ta[0] * tb[1] - ta[1] * tb[0]) / (np.hypot(*ta) * np.hypot(*tb)) < 1e-6
+
+
+def _measured(fit):
+    dense = sample_spline(fit.ctrl, 2000)
+    rmin = lane_radius(dense.curvature, W).min()
+    return rmin, max_grade(fit.elevation, fit.length_m, 20001) * 100
+
+
+def _right_turn(radius, slope):
+    a = Rail.line("A1", "Out-R", (0, 0), 0.0, 0.0, -15.0, -800, -40)
+    b = Rail.line("B1", "In-R", (0, 0), -np.pi / 2, 6.5, -15.0, 40, 800)
+    return RampSpec("r", a, b, None, -np.pi / 2, 1, W, radius, slope)
+
+
+@pytest.mark.parametrize("radius,slope", [(100.0, 4.0), (250.0, 2.0), (40.0, 6.0)])
+def test_right_turn_meets_radius_and_slope_targets_with_g1_ends(radius, slope):
+    fit = fit_ramp(_right_turn(radius, slope), seed=3)
+    _check_ends(fit)
+    rmin, smax = _measured(fit)
+    assert abs(rmin - radius) <= 0.05 * radius
+    assert abs(smax - slope) <= 0.2
+    assert fit.ok and fit.conflicts == 0
+
+
+def test_loop_ramp_turns_270_degrees_with_target_radius():
+    a = Rail.line("A1", "Out-R", (0, 0), 0.0, 0.0, -15.0, 30, 800)
+    b = Rail.line("B1", "In-R", (0, 0), np.pi / 2, 6.5, -15.0, -800, -30)
+    spec = RampSpec("loop", a, b, None, -1.5 * np.pi, 2, W, 60.0, 4.0)
+    fit = fit_ramp(spec, seed=1)
+    _check_ends(fit)
+    dense = sample_spline(fit.ctrl, 500)
+    turn = np.sum(np.diff(np.unwrap(np.arctan2(dense.tangent[:, 1], dense.tangent[:, 0]))))
+    assert turn == pytest.approx(-1.5 * np.pi, abs=0.02)
+    rmin, smax = _measured(fit)
+    assert abs(rmin - 60.0) <= 3.0 and abs(smax - 4.0) <= 0.2
+
+
+def test_flyover_clears_the_road_it_crosses():
+    # left turn from eastbound (level 0) to northbound at level 1, across a southbound road at
+    # level 1 lying between: the ramp must pass it with clearance → it needs a crest at 13 m
+    a = Rail.line("A1", "Out-R", (0, -2), 0.0, 0.0, -7.5, -900, -60)
+    b = Rail.line("B1", "In-R", (2, 0), np.pi / 2, 6.5, -7.5, 60, 900)
+    road = [-2.0, 0.0, 0.0, -1.0, -1e5, 1e5, -7.5, 0.0, 6.5]  # B2 southbound, x = -2 .. -9.5
+    obst = Obstacles(np.array([road]))
+    spec = RampSpec("fly", a, b, None, np.pi / 2, 1, W, 150.0, 5.0, z_crest=13.0)
+    fit = fit_ramp(spec, obst, seed=2)
+    _check_ends(fit)
+    assert fit.conflicts == 0
+    assert fit.z_crest == 13.0
+    rmin, smax = _measured(fit)
+    assert abs(rmin - 150) <= 7.5 and abs(smax - 5.0) <= 0.2
+    # where it crosses B2 it is at least the clearance above it
+    dense = sample_spline(fit.ctrl, 400)
+    z, _ = evaluate_polys(fit.elevation, dense.s.ravel())
+    over = (dense.xy[:, 0] < -2.0) & (dense.xy[:, 0] > -9.5)
+    assert over.any() and (z[over] - 6.5 >= 5.5 - 1e-6).all()
+
+
+def test_same_level_ramp_cannot_meet_a_slope_and_says_so():
+    a = Rail.line("A1", "Out-R", (0, 0), 0.0, 0.0, -15.0, -600, -200)
+    b = Rail.line("A1", "In-R", (0, 0), 0.0, 0.0, -15.0, 200, 600)
+    fit = fit_ramp(RampSpec("cd", a, b, None, 0.0, 2, W, 300.0, 3.0), seed=0)
+    assert fit.max_slope_pct == 0.0
+    assert not fit.slope_ok and not fit.ok
+
+
+def test_same_seed_gives_the_same_curve():
+    f1 = fit_ramp(_right_turn(100.0, 4.0), seed=5)
+    f2 = fit_ramp(_right_turn(100.0, 4.0), seed=5)
+    assert np.array_equal(f1.ctrl, f2.ctrl)
+
+
+def test_vectorized_and_plain_de_reach_the_same_tolerance():
+    plain = fit_ramp(_right_turn(100.0, 4.0), settings=FitSettings(vectorized=False), seed=4)
+    assert plain.ok
+
+
+def test_heading_vec_is_unit():
+    assert np.allclose(np.linalg.norm(heading_vec(np.linspace(0, 7, 9)), axis=-1), 1.0)
