@@ -134,3 +134,13 @@ def test_malformed_files_give_one_line_errors(tmp_path):
         read_topologies(yml)
     with pytest.raises(InputFormatError, match=r"unknown file type '.txt'"):
         read_topologies(tmp_path / "notes.txt")
+
+
+def test_measured_node_attributes_survive_native_graphml(tmp_path):
+    from flyover.topology import Connection, Ramp, Road, Topology
+    t = Topology.build("m", [Road("A1", "A"), Road("B1", "B")], [Ramp("r")],
+                       [Connection("A1", "r", Label.OUT_R), Connection("r", "B1", Label.IN_R)],
+                       node_attrs={"r": {"length_m": 412.5, "min_radius_m": 88.0, "osm_ways": "1 2"}})
+    write_graphml(t, tmp_path / "m.graphml")
+    back = read_graphml(tmp_path / "m.graphml").graph.nodes["r"]
+    assert back["length_m"] == 412.5 and back["min_radius_m"] == 88.0 and back["osm_ways"] == "1 2"

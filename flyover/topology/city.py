@@ -10,7 +10,7 @@ import json
 import logging
 import os
 from pathlib import Path
-from typing import Iterable
+from typing import Any, Iterable
 
 from flyover.errors import FlyoverError, TopologyError
 from flyover.topology.io import atomic_write, read_topologies, write_graphml
@@ -23,10 +23,12 @@ log = logging.getLogger(__name__)
 CITY_INDEX = "index.json"
 
 
-def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.PathLike) -> dict:
+def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.PathLike,
+                *, osm_options: Any = None) -> dict:
     """Read every file of ``city`` and write ``{outdir}/{interchange}.graphml``.
 
-    Also writes ``{outdir}/index.json``: the interchanges written (name,
+    ``osm_options`` (a :class:`flyover.osm.OsmOptions`) controls how OSM
+    extracts are read. Also writes ``{outdir}/index.json``: the interchanges written (name,
     source file, GraphML path) and the rejections (source file, element,
     reason). Interchange names must be unique within a city; a later
     duplicate is rejected.
@@ -41,7 +43,7 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
     interchanges, rejected = [], []
     for path in sorted(map(str, files)):
         try:
-            topologies = read_topologies(path)
+            topologies = read_topologies(path, osm_options=osm_options)
         except FlyoverError as exc:
             exc.located(path)
             log.warning("rejected %s", exc.one_line())

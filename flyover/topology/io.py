@@ -78,6 +78,9 @@ def _parse_label(value: Any, source: str | None, element: str) -> Label:
 
 # -- GraphML ------------------------------------------------------------------
 
+_CORE_NODE_KEYS = frozenset({"kind", "expressway", "lanes"})
+
+
 def graphml_bytes(topology: Topology) -> bytes:
     """The native GraphML of ``topology`` as bytes (deterministic)."""
     g = nx.DiGraph(name=topology.name)
@@ -87,6 +90,9 @@ def graphml_bytes(topology: Topology) -> bytes:
             attrs["expressway"] = d["expressway"]
         if d.get("lanes") is not None:
             attrs["lanes"] = int(d["lanes"])
+        # measured extras (OSM ramp length/radius/grade, FLYOVER radius/ctrl ...)
+        attrs.update((k, v) for k, v in sorted(d.items())
+                     if k not in _CORE_NODE_KEYS and isinstance(v, (str, int, float)) and not isinstance(v, bool))
         g.add_node(n, **attrs)
     for u, v, d in sorted(topology.graph.edges(data=True), key=lambda e: (e[0], e[1])):
         attrs = {"label": d["label"].value}
@@ -135,8 +141,9 @@ def _edges_checked(g: nx.MultiDiGraph, src: str):
 
 
 def _from_native_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
-    roads, ramps = [], []
+    roads, ramps, extras = [], [], {}
     for n, d in g.nodes(data=True):
+        extras[n] = {k: v for k, v in d.items() if k not in _CORE_NODE_KEYS}
         kind = d.get("kind")
         if kind == Kind.ROAD.value:
             lanes = d.get("lanes")
@@ -151,7 +158,7 @@ def _from_native_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
         if "label" not in d:
             raise TopologyError("edge has no label", source=src, element=el)
         conns.append(Connection(u, v, _parse_label(d["label"], src, el), _pos(d.get("pos"), src, el)))
-    return Topology.build(name, roads, ramps, conns, source=src)
+    return Topology.build(name, roads, ramps, conns, source=src, node_attrs=extras)
 
 
 def _pos(value: Any, src: str | None, el: str) -> float | None:
@@ -297,11 +304,12 @@ def write_yaml_spec(topology: Topology, path: str | os.PathLike) -> None:
 
 # -- any format ---------------------------------------------------------------
 
-def read_topologies(path: str | os.PathLike) -> list[Topology]:
+def read_topologies(path: str | os.PathLike, *, osm_options: Any = None) -> list[Topology]:
     """Read every interchange in ``path``, whatever its format (by suffix).
 
     GraphML and YAML files hold one interchange; an OpenStreetMap extract
-    (``.osm``) may hold several (needs :mod:`flyover.osm`).
+    (``.osm``) may hold several (needs :mod:`flyover.osm`; ``osm_options`` is
+    its :class:`flyover.osm.OsmOptions`, default from ``config/config.yaml``).
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -316,7 +324,7 @@ def read_topologies(path: str | os.PathLike) -> list[Topology]:
             except ImportError:
                 raise InputFormatError("OpenStreetMap import is not available in this build",
                                        source=str(p)) from None
-            return read_osm_topologies(p)
+            return read_osm_topologies(p, osm_options)
     except OSError as exc:
         raise InputFormatError(f"cannot read: {exc.strerror}", source=str(p)) from None
     raise InputFormatError(f"unknown file type {suffix!r} (expected one of {', '.join(TOPOLOGY_SUFFIXES)})",

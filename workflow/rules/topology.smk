@@ -14,6 +14,7 @@ rule import_city:
     params:
         version=TOPOLOGY_VERSION,
         city="{city}",
+        osm=config["osm"],
     script:
         "../scripts/import_city.py"
 

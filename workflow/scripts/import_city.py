@@ -1,11 +1,17 @@
 """Rule import_city: every file of one city → topology GraphML files + index."""
 import logging
 
+from flyover.osm import OsmOptions
 from flyover.topology.city import import_city
 from flyover.workflow_log import setup_logging
 
 setup_logging(snakemake.log[0])
-index = import_city(snakemake.params.city, snakemake.input, snakemake.output[0])
+index = import_city(
+    snakemake.params.city,
+    snakemake.input,
+    snakemake.output[0],
+    osm_options=OsmOptions.from_config({"osm": snakemake.params.osm}),
+)
 logging.getLogger("import_city").info(
     "%s: %d interchanges, %d rejected",
     snakemake.params.city,
