@@ -297,3 +297,23 @@ def test_cli_sample_strength_3_on_a_topology_file_writes_features(capsys, tmp_pa
 def test_cli_sample_rejects_an_unknown_argument(capsys):
     assert main(["sample", "no_such_design"]) == 1
     assert "no_such_design" in capsys.readouterr().err
+
+
+def test_rule_naming_one_element_applies_to_that_element_only():
+    from flyover.sampling.model import ElementCondition, ForbidRule
+
+    j1 = catalog_topologies()["j1"]
+    rule = ForbidRule((ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, frozenset({30.0})),
+                                                    (Feature.SLOPE_PCT, frozenset({5.0}))), "r3"),))
+    model = feature_model(j1, default_profile(), extra=[rule])
+    assert [{model.parameters[p].element for p in f.params} for f in model.forbidden] == [{"r3"}]
+    s = sample_topology(j1, default_profile(), seed=3, extra=[rule])
+    assert not any(r["element"] == "r3" and r["radius_m"] == 30 and r["slope_pct"] == 5
+                   for r in s.feature_rows())
+    assert s.coverage.complete
+
+
+def test_profile_rule_may_name_an_element():
+    doc = {**DEFAULT_PROFILE, "forbid": [{"elements": [{"kind": "ramp", "element": "r1", "radius_m": 30}]}]}
+    model = feature_model(catalog_topologies()["j1"], profile_from_dict("x", doc))
+    assert len(model.forbidden) == 1 and model.parameters[model.forbidden[0].params[0]].element == "r1"

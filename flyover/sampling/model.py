@@ -17,7 +17,10 @@ design rules) is the default ``china``::
 
 A rule with one element applies to every element of that kind; with two, to
 every ordered pair of distinct elements of those kinds, joined by an edge
-(``where: connected``, the default) or not (``where: any``).
+(``where: connected``, the default) or not (``where: any``). An element may
+also name one node (``{kind: ramp, element: r3, ...}``), as a later stage
+does when it finds a combination infeasible for one class (``extra`` of
+:func:`feature_model`).
 
 For a topology, every (element, feature) is one parameter of the covering
 array, roads first, then ramps, each in id order.
@@ -63,10 +66,12 @@ class Relation(str, enum.Enum):
 
 @dataclass(frozen=True)
 class ElementCondition:
-    """One element of a forbidden combination: its kind and the values it must hold."""
+    """One element of a forbidden combination: its kind, optionally its id, and the
+    values it must hold."""
 
     kind: Kind
     values: tuple[tuple[Feature, frozenset[float]], ...]
+    element: str | None = None
 
 
 @dataclass(frozen=True)
@@ -193,7 +198,7 @@ def _rule(doc: Any, profile: Profile, at: str, source: str | None) -> ForbidRule
         domain = profile.domain(kind)
         values = []
         for fname, vs in item.items():
-            if fname == "kind":
+            if fname in ("kind", "element"):
                 continue
             try:
                 feature = Feature(fname)
@@ -210,7 +215,8 @@ def _rule(doc: Any, profile: Profile, at: str, source: str | None) -> ForbidRule
             values.append((feature, chosen))
         if not values:
             raise ConfigError("an element needs at least one feature value", source=source, element=el)
-        conds.append(ElementCondition(kind, tuple(sorted(values))))
+        name = item.get("element")
+        conds.append(ElementCondition(kind, tuple(sorted(values)), None if name is None else str(name)))
     return ForbidRule(tuple(conds), where)
 
 
@@ -266,11 +272,14 @@ def feature_model(topology: Topology, profile: Profile,
 
 def _matches(topology: Topology, elements: list[tuple[str, Kind]], rule: ForbidRule):
     """The element tuples a rule applies to."""
-    first = [e for e, k in elements if k is rule.elements[0].kind]
+    def fits(cond: ElementCondition) -> list[str]:
+        return [e for e, k in elements if k is cond.kind and cond.element in (None, e)]
+
+    first = fits(rule.elements[0])
     if len(rule.elements) == 1:
         yield from ((e,) for e in first)
         return
-    second = [e for e, k in elements if k is rule.elements[1].kind]
+    second = fits(rule.elements[1])
     for a in first:
         for b in second:
             if a != b and (rule.where is Relation.ANY or topology.graph.has_edge(a, b)):

@@ -18,7 +18,10 @@ rule sample_class:
         "../envs/flyover.yaml"
     params:
         version=SAMPLING_VERSION,
-        sampling=config["sampling"],
+        t=config["sampling"]["t"],
+        work=config["sampling"]["work"],
+        profile=config["sampling"]["profile"],
+        profile_spec=config["sampling"]["profiles"].get(config["sampling"]["profile"]),
         seed=config["seed"],
     threads: 1
     benchmark:

@@ -9,7 +9,10 @@ from flyover.workflow_log import setup_logging
 
 setup_logging(snakemake.log[0])
 class_id = snakemake.wildcards.class_id
-settings = settings_from_config({"sampling": snakemake.params.sampling})
+p = snakemake.params
+profiles = {p.profile: p.profile_spec} if p.profile_spec else {}
+settings = settings_from_config(
+    {"sampling": {"t": p.t, "work": p.work, "profile": p.profile, "profiles": profiles}})
 sampling = sample_topology(read_graphml(snakemake.input.topology), settings.profile,
                            t=settings.t, seed=snakemake.params.seed, class_id=class_id,
                            budget=settings.budget)
