@@ -5,32 +5,33 @@ each, such that every t parameters show every allowed combination of their
 values in some row. The paper makes them with Microsoft PICT (greedy); this
 module makes smaller ones, in three steps:
 
-1. **Construction.** Two starts, the smaller kept once complete:
+1. **Start** with as many rows as the lower bound (the most required tuples
+   of any t parameters):
 
-   * *algebraic* — Bush's orthogonal array OA(q^t, q+1, q, t) over GF(q)
-     (:mod:`flyover.sampling.galois`) for the q+1 parameters with the most
-     values, mapped onto fewer levels where a parameter has fewer than q;
-     the remaining parameters are filled greedily into the same q^t rows and
-     a tabu search (step 2) tries to complete it without adding rows. When
-     the t largest parameters all have q values, q^t is the lower bound, so
-     a completed start is optimal.
-   * *in-parameter-order* (IPOG) — the full product of the t largest
-     parameters, the rest filled greedily, then rows added greedily for
-     whatever is still uncovered.
+   * *algebraic*, when that bound is q^t for a prime power q (the t largest
+     parameters all have q values): Bush's orthogonal array OA(q^t, q+1, q, t)
+     over GF(q) (:mod:`flyover.sampling.galois`) for the q+1 parameters with
+     the most values, mapped onto fewer levels where a parameter has fewer;
+   * otherwise the full product of the t largest parameters (as IPOG does).
+
+   The other parameters are filled in greedily, row by row (IPOG's horizontal
+   growth), and the tabu search (step 2) tries to complete the array without
+   adding a row; a completed start is optimal. What it leaves uncovered gets
+   greedy extra rows (IPOG's vertical growth).
 
 2. **Tabu search** (after Nurmela, 2004) at a fixed number of rows: pick an
    uncovered tuple, consider every single-cell change that covers it, take
    the one that leaves the fewest tuples uncovered, and forbid changing that
-   cell again for a while.
+   cell again for a while (:mod:`flyover.sampling._kernels`, compiled).
 
-3. **Shrinking.** Drop the row that covers the fewest tuples alone and let
-   the tabu search repair the loss; repeat until the lower bound is reached
-   or a repair fails.
+3. **Shrinking.** Drop a row that covers fewest tuples alone and let the tabu
+   search repair the loss; repeat until the lower bound is reached or
+   ``retries`` repairs in a row fail.
 
 Forbidden combinations are never written into a row, and only tuples some
 valid row can hold are required. Everything random draws from one
-:class:`numpy.random.Generator` seeded by the caller, and every budget is
-counted in steps, never in seconds: the same inputs give the same array.
+:class:`numpy.random.Generator` seeded by the caller, and the effort is
+counted in work, never in seconds: the same inputs give the same array.
 
 Examples
 --------
@@ -67,7 +68,7 @@ class SearchBudget:
     ----------
     work
         Total work across construction and shrinking, in rows scanned plus
-        tuples looked up; 10^8 is about one second on a current core.
+        tuples looked up; a current core does about 3·10^8 a second.
     stall
         One attempt gives up after this many steps without reducing the
         number of uncovered tuples.
@@ -78,7 +79,7 @@ class SearchBudget:
         dropping another of the rows that cover fewest tuples alone.
     """
 
-    work: int = 400_000_000
+    work: int = 1_000_000_000
     stall: int = 20_000
     tenure: int = 6
     retries: int = 8
