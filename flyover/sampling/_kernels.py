@@ -43,15 +43,22 @@ def _rand(state, n):
 
 
 @njit(cache=True)
+def _part(A, r, c, i, others, mul_o, base):
+    """The number of the tuple of c's i-th t-set in row r, less c's own term."""
+    part = base[c, i]
+    for j in range(others.shape[2]):
+        part += A[r, others[c, i, j]] * mul_o[c, i, j]
+    return part
+
+
+@njit(cache=True)
 def _set(A, r, c, v, counts, unc, pos, n_unc, others, mul_o, mul_c, base):
     """``A[r, c] = v``, updating tuple counts and the uncovered list; returns the new count."""
     old_v = A[r, c]
     if old_v == v:
         return n_unc
     for i in range(others.shape[1]):
-        part = base[c, i]
-        for j in range(others.shape[2]):
-            part += A[r, others[c, i, j]] * mul_o[c, i, j]
+        part = _part(A, r, c, i, others, mul_o, base)
         old = part + old_v * mul_c[c, i]
         new = part + v * mul_c[c, i]
         counts[old] -= 1
@@ -76,9 +83,7 @@ def _delta(A, r, c, v, counts, others, mul_o, mul_c, base):
     d = 0
     old_v = A[r, c]
     for i in range(others.shape[1]):
-        part = base[c, i]
-        for j in range(others.shape[2]):
-            part += A[r, others[c, i, j]] * mul_o[c, i, j]
+        part = _part(A, r, c, i, others, mul_o, base)
         old = part + old_v * mul_c[c, i]
         new = part + v * mul_c[c, i]
         if counts[old] == 1:
