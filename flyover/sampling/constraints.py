@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
@@ -75,8 +76,6 @@ class Constraints:
         for f in self.forbidden:
             for p in f.params:
                 self._by_param.setdefault(p, []).append(f)
-        self._masks = {f: [(p, np.isin(np.arange(self.levels[p]), sorted(vs))) for p, vs in f.cells]
-                       for f in self.forbidden}
         self._component = self._components()
         self._memo: dict[tuple, bool] = {}
         for comp in set(self._component.values()):
@@ -115,19 +114,29 @@ class Constraints:
         """A full row holds no forbidden combination."""
         return not any(f.matches(row) for f in self.forbidden)
 
-    def rows_ok(self, rows: np.ndarray, param: int, value: int) -> np.ndarray:
-        """For each full row of ``rows`` with ``param`` set to ``value``: is it valid?
+    @cached_property
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """The combinations as padded arrays, indexed by parameter (for compiled code).
 
-        Only the combinations naming ``param`` are checked: the rows are
-        assumed valid before the change.
+        ``(f_len, f_params, f_masks, p_ptr, p_forb)``: combination i names
+        ``f_len[i]`` parameters ``f_params[i, :f_len[i]]``, the j-th holding the
+        values where ``f_masks[i, j]`` is true; the combinations naming
+        parameter p are ``p_forb[p_ptr[p]:p_ptr[p + 1]]``.
         """
-        ok = np.ones(len(rows), dtype=bool)
-        for f in self._by_param.get(param, ()):
-            hit = np.ones(len(rows), dtype=bool)
-            for p, mask in self._masks[f]:
-                hit &= mask[value] if p == param else mask[rows[:, p]]
-            ok &= ~hit
-        return ok
+        forb = self.forbidden
+        width = max((len(f.cells) for f in forb), default=1)
+        f_len = np.array([len(f.cells) for f in forb], dtype=np.int64)
+        f_params = np.full((len(forb), width), -1, dtype=np.int64)
+        f_masks = np.zeros((len(forb), width, max(self.levels)), dtype=bool)
+        for i, f in enumerate(forb):
+            for j, (p, vs) in enumerate(f.cells):
+                f_params[i, j] = p
+                f_masks[i, j, sorted(vs)] = True
+        index = {f: i for i, f in enumerate(forb)}
+        by_param = [[index[f] for f in self._by_param.get(p, ())] for p in range(len(self.levels))]
+        p_ptr = np.concatenate([[0], np.cumsum([len(b) for b in by_param])]).astype(np.int64)
+        p_forb = np.array([i for b in by_param for i in b], dtype=np.int64)
+        return f_len, f_params, f_masks, p_ptr, p_forb
 
     def extendable(self, partial: Mapping[int, int]) -> bool:
         """Whether some valid full row agrees with ``partial`` (parameter → value)."""

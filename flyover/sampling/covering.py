@@ -134,27 +134,9 @@ class _State:
         used, self.n_unc = tabu_search(
             self.A, self.counts, self.unc, self.pos, self.n_unc,
             space.offsets, space.tsets, space.strides, space.levels,
-            inc.others, inc.mul_o, inc.mul_c, inc.base, *_constraint_arrays(space.constraints),
+            inc.others, inc.mul_o, inc.mul_c, inc.base, *space.constraints.arrays,
             work, budget.stall, budget.tenure, int(rng.integers(2**63)))
         return int(used)
-
-
-def _constraint_arrays(cons: Constraints) -> tuple[np.ndarray, ...]:
-    """The forbidden combinations as padded arrays for the kernel, indexed by parameter."""
-    forb = cons.forbidden
-    width = max((len(f.cells) for f in forb), default=1)
-    top = max(cons.levels)
-    f_len = np.array([len(f.cells) for f in forb], dtype=np.int64)
-    f_params = np.full((len(forb), width), -1, dtype=np.int64)
-    f_masks = np.zeros((len(forb), width, top), dtype=bool)
-    for i, f in enumerate(forb):
-        for j, (p, vs) in enumerate(f.cells):
-            f_params[i, j] = p
-            f_masks[i, j, sorted(vs)] = True
-    by_param = [[i for i, f in enumerate(forb) if p in f.params] for p in range(len(cons.levels))]
-    p_ptr = np.concatenate([[0], np.cumsum([len(b) for b in by_param])]).astype(np.int64)
-    p_forb = np.array([i for b in by_param for i in b], dtype=np.int64)
-    return f_len, f_params, f_masks, p_ptr, p_forb
 
 
 class _Builder:
