@@ -124,6 +124,14 @@ def test_strength_3_covers_every_triple_within_picts_rows():
     assert len(ca.rows) <= 691  # PICT: 691 rows
 
 
+def test_strength_3_works_for_8_ramps():
+    levels = paper_levels(4, 8)
+    ca = covering_array(levels, 3, seed=2, budget=SearchBudget(work=100_000_000))
+    covered, total = independent_coverage(ca.rows, levels, 3)
+    assert covered == total == ca.coverage.tuples_total
+    assert 512 <= len(ca.rows) < 1140  # PICT: 1140 rows
+
+
 def test_removed_row_is_detected_as_lost_coverage():
     levels = paper_levels(4, 4)
     ca = covering_array(levels, 2, seed=1)
