@@ -186,6 +186,20 @@ def test_movements_through_a_fork_reach_both_branches():
     assert movements(sample_geometry("fork")) == [("A1", "A1"), ("A1", "B2"), ("B2", "B2")]
 
 
+def test_movements_of_a_carriageway_end_split_in_two():
+    assert movements(sample_geometry("y")) == [("A1", "A1"), ("A2", "A2"), ("C1", "A1"), ("C1", "A2")]
+
+
+def test_elevation_records_that_continue_one_polynomial_are_merged():
+    from flyover.opendrive.reader import Cubic
+    from flyover.opendrive.writer import _merge_same
+
+    a = Cubic(0.0, 1.0, 0.1, 0.01, 0.0)
+    same = Cubic(10.0, float(a(10.0)), 0.1 + 2 * 0.01 * 10, 0.01, 0.0)
+    other = Cubic(20.0, 5.0, 0.0, 0.0, 0.0)
+    assert _merge_same([a, same, other]) == [a, other]
+
+
 def test_movements_of_the_loop():
     assert movements(sample_geometry("loop")) == [("A1", "A1"), ("A1", "B1"), ("B1", "B1")]
 

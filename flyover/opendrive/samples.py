@@ -5,7 +5,9 @@ climbing to the crossing road; ``"flyover"`` — a right exit that crosses
 over its own expressway to the left; ``"t"`` — a T end: a carriageway
 ending into a ramp (``Out-M``) with a left exit that flies over the through
 road; ``"fork"`` — a two-lane ramp whose free end forks into two
-one-lane ramps (one back to its road, one up to the crossing road).
+one-lane ramps (one back to its road, one up to the crossing road); ``"y"`` —
+a carriageway that ends by splitting into a straight-on ramp (``Out-M``,
+flying over to the left) and a ramp beside it (``Out-R``) at the same point.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from flyover.opendrive.curves import BezierChain
 
 __all__ = ["sample_geometry", "SAMPLES"]
 
-SAMPLES = ("loop", "flyover", "t", "fork")
+SAMPLES = ("loop", "flyover", "t", "fork", "y")
 _K = 4 * (math.sqrt(2) - 1) / 3  # Bézier quarter-circle handle
 
 
@@ -104,4 +106,15 @@ def sample_geometry(kind: str) -> InterchangeGeometry:
         r3 = _ramp("r3", [p3], 0.0, 6.5, Attachment("r1", "Out-R", L1, -rw, 0.0, 0.0),
                    Attachment("B2", "In-R", 700.0, -2 * lw, -math.pi / 2, 6.5))
         return InterchangeGeometry("cfork", 0, 4, lw, 2.5, rw, (0.0, 6.5), (a1, b2), (r1, r2, r3))
+    if kind == "y":
+        a1 = RoadGeometry("A1", "A", 2, 0, 0.0, (-500.0, 0.0), 0.0, 1000.0)
+        a2 = RoadGeometry("A2", "A", 2, 0, 0.0, (500.0, 5.0), math.pi, 1000.0)
+        c1 = RoadGeometry("C1", "C", 2, 0, 0.0, (20.0, -600.0), math.pi / 2, 400.0)
+        p1 = [(20.0, -200.0), (20.0, -50.0), (-50.0, 12.5), (-300.0, 12.5)]
+        r1 = _ramp("r1", [p1], 0.0, 0.0, Attachment("C1", "Out-M", 400.0, 0.0, math.pi / 2, 0.0),
+                   Attachment("A2", "In-R", 800.0, -2 * lw, math.pi, 0.0), hump=6.5)
+        p2 = [(27.5, -200.0), (27.5, -100.0), (150.0, -7.5), (300.0, -7.5)]
+        r2 = _ramp("r2", [p2], 0.0, 0.0, Attachment("C1", "Out-R", 400.0, -2 * lw, math.pi / 2, 0.0),
+                   Attachment("A1", "In-R", 800.0, -2 * lw, 0.0, 0.0))
+        return InterchangeGeometry("cy", 0, 5, lw, 2.5, rw, (0.0, 6.5), (a1, a2, c1), (r1, r2))
     raise ValueError(f"unknown sample {kind!r} (one of {', '.join(SAMPLES)})")

@@ -106,20 +106,18 @@ def movements(g: InterchangeGeometry) -> list[tuple[str, str]]:
         stack, seen = [(u, 0.0)], set()
         while stack:
             el, s_in = stack.pop()
-            for s, rid, _ in outs.get(el, []):
-                if s < s_in - 1e-6 or (rid, 0.0) in seen:
-                    continue
-                seen.add((rid, 0.0))
-                end = ramp[rid].end
-                if not end.parent:  # a free end: the ramp forks into others
-                    stack.append((rid, 0.0))
-                elif end.parent in ramp:
+            if (el, s_in) in seen:
+                continue
+            seen.add((el, s_in))
+            if el in ramp:  # a ramp ends into a road (an exit), another ramp, or forks
+                end = ramp[el].end
+                if end.parent in ramp:
                     stack.append((end.parent, end.s_m))
+                elif end.parent and end.parent not in ends_into_ramp:
+                    found.add((u, end.parent))
+            for s_out, rid, _ in outs.get(el, []):
+                if s_out >= s_in - 1e-6:
                     stack.append((rid, 0.0))
-                else:
-                    stack.append((rid, 0.0))
-                    if end.parent not in ends_into_ramp:
-                        found.add((u, end.parent))
     return sorted(found)
 
 

@@ -128,7 +128,26 @@ class _Element:
             dl = start - r.s
             out.append(Cubic(start - s0, r.a + r.b * dl + r.c * dl ** 2 + r.d * dl ** 3,
                              r.b + 2 * r.c * dl + 3 * r.d * dl ** 2, r.c + 3 * r.d * dl, r.d))
-        return out
+        return _merge_same(out)
+
+
+def _rebase(c: Cubic, s: float) -> Cubic:
+    dl = s - c.s
+    return Cubic(s, c.a + c.b * dl + c.c * dl ** 2 + c.d * dl ** 3,
+                 c.b + 2 * c.c * dl + 3 * c.d * dl ** 2, c.c + 3 * c.d * dl, c.d)
+
+
+def _merge_same(records: list[Cubic], tol: float = 1e-9) -> list[Cubic]:
+    """Drop records that only continue the previous polynomial (redundant in OpenDRIVE)."""
+    out: list[Cubic] = []
+    for r in records:
+        if out:
+            p = _rebase(out[-1], r.s)
+            if all(abs(x - y) <= tol * max(1.0, abs(x)) for x, y in
+                   ((p.a, r.a), (p.b, r.b), (p.c, r.c), (p.d, r.d))):
+                continue
+        out.append(r)
+    return out
 
 
 @dataclass(frozen=True)
