@@ -74,10 +74,17 @@ def draw_plan(net: XodrNetwork, path: str | os.PathLike, title: str | None = Non
         named.setdefault(r.name or r.id, []).append(r)
     for name, roads in sorted(named.items()):
         # label each element at the middle of its piece farthest from the origin (the centre)
-        mids = [(r, r.reference(r.length / 2)) for r in roads if r.junction == "-1"] or \
-            [(r, r.reference(r.length / 2)) for r in roads]
-        _, (x, y, _, _) = max(mids, key=lambda m: (float(m[1][0][0]) ** 2 + float(m[1][1][0]) ** 2,
-                                                 m[0].length))
+        # a carriageway at its entry (so opposite carriageways part), else the middle of
+        # the element's piece farthest from the origin (the interchange centre)
+        entry = [r for r in roads if r.junction == "-1" and r.predecessor is None
+                 and r.geometry[0].kind == "line"]
+        if entry:
+            x, y, _, _ = entry[0].reference(min(80.0, entry[0].length / 2))
+        else:
+            mids = [(r, r.reference(r.length / 2)) for r in roads if r.junction == "-1"] or \
+                [(r, r.reference(r.length / 2)) for r in roads]
+            _, (x, y, _, _) = max(mids, key=lambda m: (float(m[1][0][0]) ** 2
+                                                     + float(m[1][1][0]) ** 2, m[0].length))
         ax.annotate(name, (float(x[0]), float(y[0])), fontsize=8, ha="center", va="center",
                     bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="0.5", lw=0.5, alpha=0.85))
     if polys:
