@@ -310,7 +310,7 @@ def _plan_pieces(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportO
         par, ramp = els[e.parent], els[e.ramp]
         same = sorted(x.s for x in events if x.parent == e.parent and x.side != "M")
         gaps = [abs(x - e.s) for x in same if abs(x - e.s) > 1e-9]
-        gaps += [e.s, par.length - e.s] if True else []
+        gaps += [e.s, par.length - e.s]
         other = [x.s for x in events if x.parent == e.ramp and x.side != "M"]
         ramp_s = 0.0 if e.out else ramp.length
         gaps += [abs(x - ramp_s) for x in other] + [ramp.length / 2]
@@ -655,7 +655,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         el = els[k]
         for p in pieces[k]:
             _write_road(root, el, p, layouts[p.road_id], pred_links.get(p.road_id, {}),
-                        succ_links.get(p.road_id, {}), ids)
+                        succ_links.get(p.road_id, {}))
     for j in junctions:
         jname = (f"{j.group[0].parent} {'fork' if j.forking else 'join'}" if j.group
                  else f"{j.event.parent}/{j.event.ramp}")
@@ -672,7 +672,8 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
-def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict, ids) -> None:
+def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict) -> None:
+    """One ``<road>``: links, plan view, elevation, lane offset and lane sections."""
     L = p.s1 - p.s0
     road = etree.SubElement(root, "road", name=el.id, length=_f(L), id=str(p.road_id),
                             junction=str(p.junction if p.junction is not None else -1), rule="RHT")
@@ -723,7 +724,7 @@ def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict,
         ctr = etree.SubElement(sec, "center")
         cl = etree.SubElement(ctr, "lane", id="0", type="none", level="false")
         etree.SubElement(cl, "roadMark", sOffset="0.0", type="solid", weight="standard",
-                         color="yellow" if True else "", width="0.15", laneChange="none")
+                         color="yellow", width="0.15", laneChange="none")
         right = etree.SubElement(sec, "right")
         prev_keys = {key: -(i + 1) for i, (key, _) in enumerate(layout[idx - 1][1][1])} if idx > 0 else {}
         next_keys = ({key: -(i + 1) for i, (key, _) in enumerate(layout[idx + 1][1][1])}
@@ -739,8 +740,7 @@ def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict,
             # a lane that starts (ends) at zero width has no predecessor (successor)
             if abs(w.a) < 1e-9:
                 pred = None
-            wend = w.a + w.b * 1 + 0  # placeholder, end width computed below
-            sec_len = (layout[idx + 1][0] if idx + 1 < len(layout) else road_len(road)) - s0
+            sec_len = (layout[idx + 1][0] if idx + 1 < len(layout) else float(road.get("length"))) - s0
             wend = float(w(sec_len))
             if abs(wend) < 1e-9:
                 succ = None
@@ -758,10 +758,6 @@ def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict,
             if key[0] != "sh":
                 etree.SubElement(lane, "speed", sOffset="0.0", max="22.22" if el.kind == "ramp" else "33.33",
                                  unit="m/s")
-
-
-def road_len(road) -> float:
-    return float(road.get("length"))
 
 
 def write_xodr(g: InterchangeGeometry, path: str | os.PathLike,
