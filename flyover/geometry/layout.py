@@ -498,8 +498,8 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
         if fit.conflicts == 0:
             break
         higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6]
-        if not higher:
-            break
+        if not higher or (len(tried) > 1 and fit.conflicts >= tried[-2].conflicts):
+            break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
     return best, evals, secs

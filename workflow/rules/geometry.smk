@@ -1,9 +1,10 @@
 # Step 4: feature sets → concrete 3D interchanges (road layout + ramps fitted by DE).
 #
 # Fan-out: the samples of a class are known only once its feature sets exist, so
-# checkpoint geometry_samples lists them (results/geometry/{class_id}/samples.json);
-# each interchange is then its own job (rule geometry), so one changed class or a
-# new sample reruns only what depends on it.
+# checkpoint geometry_plan lists them for every class (results/geometry/plan.json, a
+# cheap job); each interchange is then its own job (rule geometry) whose inputs are
+# only its class's topology and feature sets, so a new city or a changed class reruns
+# only its own interchanges (plus the plan and the aggregate table).
 
 GEOMETRY_VERSION = 1
 
@@ -14,33 +15,34 @@ def _features_buildable(class_id):
     return made or Path(f"results/features/{class_id}.parquet").exists()
 
 
+def geometry_features(wildcards):
+    """The feature sets of every class that has (or will have) them."""
+    return [f"results/features/{c}.parquet" for c in class_ids() if _features_buildable(c)]
+
+
 def geometry_interchanges():
     """(class_id, sample) of every interchange to build (used by the export rules)."""
-    pairs = []
-    for c in class_ids():
-        if not _features_buildable(c):
-            continue
-        path = checkpoints.geometry_samples.get(class_id=c).output.samples
-        pairs += [(c, int(s)) for s in json.loads(Path(path).read_text(encoding="utf-8"))]
-    return pairs
+    path = checkpoints.geometry_plan.get().output.plan
+    plan = json.loads(Path(path).read_text(encoding="utf-8"))
+    return [(c, int(s)) for c, samples in sorted(plan.items()) for s in samples]
 
 
 def geometry_tables(wildcards):
     return [f"results/interchanges/{c}/{s}/geometry.parquet" for c, s in geometry_interchanges()]
 
 
-checkpoint geometry_samples:
-    """A class's feature sets → the list of its samples."""
+checkpoint geometry_plan:
+    """Every class's feature sets → class id → its sample numbers (the fan-out)."""
     input:
-        features="results/features/{class_id}.parquet",
+        geometry_features,
     output:
-        samples="results/geometry/{class_id}/samples.json",
+        plan="results/geometry/plan.json",
     log:
-        "logs/geometry/{class_id}/samples.log",
+        "logs/geometry/plan.log",
     params:
         version=GEOMETRY_VERSION,
     script:
-        "../scripts/geometry_samples.py"
+        "../scripts/geometry_plan.py"
 
 
 rule geometry:

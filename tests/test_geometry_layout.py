@@ -1,0 +1,118 @@
+"""Layout of whole interchanges: roads, levels, attachments, geometry.json contract."""
+
+import math
+
+import numpy as np
+import pytest
+
+from flyover.geometry.bezier import sample_spline
+from flyover.geometry.layout import GeometryError, LayoutSettings, RampFeatures, build_interchange
+from flyover.geometry.model import InterchangeGeometry
+from flyover.geometry.profile import evaluate_polys
+from flyover.topology.catalog import catalog_topologies
+from flyover.topology.model import Connection, Label, Ramp, Road, Topology
+
+
+def _build(name, radius=150.0, slope=4.0, seed=3, lanes=3):
+    t = catalog_topologies()[name]
+    feats = {r: RampFeatures(radius, slope) for r in t.ramps}
+    return t, build_interchange(t, {r: lanes for r in t.roads}, feats, class_id="c0",
+                                sample=0, seed=seed)
+
+
+def _attach_point(g: InterchangeGeometry, att, lanes_w):
+    """Where an attachment is, from the JSON alone (roads only)."""
+    road = g.road(att.parent)
+    d = np.array([math.cos(road.heading_rad), math.sin(road.heading_rad)])
+    n = np.array([-d[1], d[0]])
+    return np.array(road.start) + att.s_m * d + att.offset_m * n, road.heading_rad, road.z_m
+
+
+@pytest.fixture(scope="module")
+def parclo():
+    return _build("parclo_adjacent")
+
+
+def test_cross_layout_has_perpendicular_expressways_on_two_levels(parclo):
+    _, ic = parclo
+    g = ic.geometry
+    heads = {r.id: r.heading_rad for r in g.roads}
+    assert abs(abs(((heads["A1"] - heads["A2"]) + np.pi) % (2 * np.pi) - np.pi) - np.pi) < 1e-9
+    assert abs(abs(math.sin(heads["A1"] - heads["B1"])) - 1) < 1e-9
+    assert {r.level for r in g.roads if r.expressway == "A"} != \
+        {r.level for r in g.roads if r.expressway == "B"}
+    assert all(r.z_m == g.levels_m[r.level] for r in g.roads)
+
+
+def test_ramps_meet_their_road_attachments_within_contract_tolerance(parclo):
+    _, ic = parclo
+    g = ic.geometry
+    for ramp in g.ramps:
+        first, last = ramp.plan[0].p, ramp.plan[-1].p
+        for att, pt, tan in ((ramp.start, first[0], np.subtract(first[1], first[0])),
+                             (ramp.end, last[3], np.subtract(last[3], last[2]))):
+            p, h, z = _attach_point(g, att, g.lane_width_m)
+            assert np.hypot(*(p - pt)) < 0.01, ramp.id
+            dh = (math.atan2(tan[1], tan[0]) - h + np.pi) % (2 * np.pi) - np.pi
+            assert abs(dh) < math.radians(0.5), ramp.id
+            assert abs(att.z_m - z) < 0.01
+        zs, _ = evaluate_polys(ramp.elevation, np.array([0.0, ramp.length_m]))
+        assert abs(zs[0] - ramp.start.z_m) < 0.01 and abs(zs[1] - ramp.end.z_m) < 0.01
+
+
+def test_catalog_design_ramps_meet_targets_and_do_not_cross_at_one_level(parclo):
+    _, ic = parclo
+    for o in ic.outcomes:
+        assert o.fit.conflicts == 0, o.ramp
+        assert o.fit.ok, (o.ramp, o.fit.min_radius_m, o.fit.max_slope_pct)
+
+
+def test_loops_of_a_parclo_turn_270_degrees(parclo):
+    _, ic = parclo
+    for rid in ("lA1", "lB2"):
+        ramp = ic.geometry.ramp(rid)
+        s = sample_spline(np.array([p.p for p in ramp.plan]), 400)
+        turn = np.diff(np.unwrap(np.arctan2(s.tangent[:, 1], s.tangent[:, 0]))).sum()
+        assert turn == pytest.approx(-1.5 * np.pi, abs=0.05)
+
+
+def test_t_layout_ends_the_terminating_expressway_above_the_through_one():
+    t, ic = _build("semidirectional_t")
+    g = ic.geometry
+    a = {r.id: r for r in g.roads}
+    assert a["A1"].level == a["A2"].level == 0 and a["B1"].level == a["B2"].level == 1
+    b1_end = np.array(a["B1"].start) + a["B1"].length_m * np.array(
+        [math.cos(a["B1"].heading_rad), math.sin(a["B1"].heading_rad)])
+    r_l = g.ramp("rL")  # continues B1 straight on
+    assert np.hypot(*(np.array(r_l.plan[0].p[0]) - b1_end)) < 0.01
+    assert r_l.start.label == "Out-M" and r_l.start.offset_m == 0.0
+
+
+def test_same_inputs_give_identical_geometry_json():
+    _, a = _build("parclo_opposite", seed=9)
+    _, b = _build("parclo_opposite", seed=9)
+    assert a.geometry.to_json() == b.geometry.to_json()
+
+
+def test_missing_features_name_the_ramp():
+    t = catalog_topologies()["parclo_adjacent"]
+    with pytest.raises(GeometryError, match="lA1"):
+        build_interchange(t, {}, {r: RampFeatures(100, 3) for r in t.ramps if r != "lA1"})
+
+
+def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
+    t = Topology.build("cd", [Road("A1", "A"), Road("A2", "A")], [Ramp("c")],
+                       [Connection("A1", "c", Label.OUT_R, 0.2),
+                        Connection("c", "A1", Label.IN_R, 0.8)])
+    calls = []
+
+    def resample(ramp, attempt):
+        calls.append((ramp, attempt))
+        return RampFeatures(300.0, 2.0)
+
+    ic = build_interchange(t, {"A1": 2, "A2": 2}, {"c": RampFeatures(300.0, 3.0)},
+                           settings=LayoutSettings(max_resamples=2), resampler=resample)
+    (o,) = ic.outcomes
+    assert not o.first_try_ok and o.resamples == 2 and calls == [("c", 1), ("c", 2)]
+    assert "level ramp" in o.infeasible
+    assert ic.geometry.ramp("c").infeasible == o.infeasible
