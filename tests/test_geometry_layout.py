@@ -100,6 +100,24 @@ def test_missing_features_name_the_ramp():
         build_interchange(t, {}, {r: RampFeatures(100, 3) for r in t.ramps if r != "lA1"})
 
 
+def test_ramp_missing_its_target_is_resampled_a_bounded_number_of_times():
+    t = catalog_topologies()["parclo_adjacent"]
+    feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
+    feats["oA1"] = RampFeatures(5000.0, 4.0)  # a 90° turn of R 5 km does not fit in reach_m
+    calls = []
+
+    def resample(ramp, attempt):
+        calls.append((ramp, attempt))
+        return RampFeatures(5000.0 if attempt < 2 else 150.0, 4.0)
+
+    ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
+                           settings=LayoutSettings(max_resamples=3), resampler=resample)
+    o = next(o for o in ic.outcomes if o.ramp == "oA1")
+    assert not o.first_try_ok and o.resamples == 2 and calls == [("oA1", 1), ("oA1", 2)]
+    assert o.fit.ok and o.fit.spec.target_radius_m == 150.0
+    assert ic.geometry.ramp("oA1").resamples == 2
+
+
 def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
     t = Topology.build("cd", [Road("A1", "A"), Road("A2", "A")], [Ramp("c")],
                        [Connection("A1", "c", Label.OUT_R, 0.2),
@@ -113,6 +131,7 @@ def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
     ic = build_interchange(t, {"A1": 2, "A2": 2}, {"c": RampFeatures(300.0, 3.0)},
                            settings=LayoutSettings(max_resamples=2), resampler=resample)
     (o,) = ic.outcomes
-    assert not o.first_try_ok and o.resamples == 2 and calls == [("c", 1), ("c", 2)]
-    assert "level ramp" in o.infeasible
+    # systematic: no slope can be met between equal heights, so no resampling either
+    assert not o.first_try_ok and o.resamples == 0 and calls == []
+    assert "level ramp" in o.infeasible and not o.fit.ok
     assert ic.geometry.ramp("c").infeasible == o.infeasible

@@ -354,7 +354,9 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
         z = heights(smp.s, length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
         conf = _conflicts(spec, smp.xy, smp.tangent, smp.s, z, length, obstacles, settings)
         r_eff = min(r_t, settings.inf_reference_m)
-        l_ref = 1.2 * np.maximum(need, r_eff * np.abs(dec.turn) + 2 * settings.transition_m)
+        chord = np.hypot(dec.b[0] - dec.a[0], dec.b[1] - dec.a[1])
+        l_ref = 1.2 * np.maximum(np.maximum(need, chord),
+                                 r_eff * np.abs(dec.turn) + 2 * settings.transition_m)
         excess = np.clip(length / l_ref - 1.0, 0, None)
         return {"rad_err": rad_err, "smooth": smooth, "shortfall": shortfall, "excess": excess,
                 "turn_err": turn_err, "g2": g2, "conflicts": conf}

@@ -540,7 +540,8 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         fit, evals, secs = _fit_with_levels(b, b.spec(ramp, feat), rseed)
         first_ok = fit.ok
         attempts, tried = 0, [fit]
-        while not fit.ok and resampler is not None and attempts < st.max_resamples:
+        while (not fit.ok and resampler is not None and attempts < st.max_resamples
+               and not _systematic(fit)):
             attempts += 1
             new = resampler(ramp, attempts)
             if new is None:
@@ -556,6 +557,14 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         b.record(ramp, fit)
         outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs))
     return Interchange(_assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
+
+
+def _systematic(fit: RampFit) -> bool:
+    """A level ramp (ends at one height, nothing to pass over) cannot have any slope:
+    resampling cannot help, the feature set is systematically infeasible."""
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    level = abs(za - zb) < 1e-6 and fit.z_crest <= max(za, zb) + 1e-6
+    return level and fit.radius_ok and fit.conflicts == 0 and not fit.slope_ok
 
 
 def _reason(fit: RampFit) -> str:
