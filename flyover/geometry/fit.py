@@ -141,7 +141,7 @@ class FitSettings:
     """Settings of the search and the tolerances (from config ``geometry``)."""
 
     popsize: int = 8
-    maxiter: int = 200
+    maxiter: int = 150
     min_generations: int = 10
     tol_radius: float = 0.05
     tol_slope_pp: float = 0.2

@@ -76,6 +76,7 @@ class LayoutSettings:
     road_margin_m: float = 100.0
     cd_clear_m: float = 350.0
     max_resamples: int = 3
+    restarts: int = 1
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
@@ -502,6 +503,14 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
+    for k in range(st.restarts):  # same targets, another DE seed
+        if best.ok or _systematic(best):
+            break
+        fit = fit_ramp(replace(spec, z_crest=best.spec.z_crest), obst, st.fit,
+                       seed=seed + 104_729 * (k + 1))
+        evals += fit.evaluations
+        secs += fit.seconds
+        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
     return best, evals, secs
 
 
