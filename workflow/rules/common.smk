@@ -102,3 +102,29 @@ def export_outputs(wildcards):
         for c, s in exported_interchanges()
         for name in ("interchange.xodr", "interchange.net.xml", "plan.png")
     ]
+
+
+# -- geometry stage (workflow/rules/geometry.smk) --------------------------------
+GEOMETRY_VERSION = 1
+
+
+def _features_buildable(class_id):
+    """True when a rule makes (or has made) the class's feature sets."""
+    made = any("results/features/" in str(o) for r in workflow.rules for o in r.output)
+    return made or Path(f"results/features/{class_id}.parquet").exists()
+
+
+def geometry_features(wildcards):
+    """The feature sets of every class that has (or will have) them."""
+    return [f"results/features/{c}.parquet" for c in class_ids() if _features_buildable(c)]
+
+
+def geometry_interchanges():
+    """(class_id, sample) of every interchange to build (used by the export rules)."""
+    path = checkpoints.geometry_plan.get().output.plan
+    plan = json.loads(Path(path).read_text(encoding="utf-8"))
+    return [(c, int(s)) for c, samples in sorted(plan.items()) for s in samples]
+
+
+def geometry_tables(wildcards):
+    return [f"results/interchanges/{c}/{s}/geometry.parquet" for c, s in geometry_interchanges()]

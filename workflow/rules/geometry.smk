@@ -4,31 +4,7 @@
 # checkpoint geometry_plan lists them for every class (results/geometry/plan.json, a
 # cheap job); each interchange is then its own job (rule geometry) whose inputs are
 # only its class's topology and feature sets, so a new city or a changed class reruns
-# only its own interchanges (plus the plan and the aggregate table).
-
-GEOMETRY_VERSION = 1
-
-
-def _features_buildable(class_id):
-    """True when a rule makes (or has made) the class's feature sets."""
-    made = any("results/features/" in str(o) for r in workflow.rules for o in r.output)
-    return made or Path(f"results/features/{class_id}.parquet").exists()
-
-
-def geometry_features(wildcards):
-    """The feature sets of every class that has (or will have) them."""
-    return [f"results/features/{c}.parquet" for c in class_ids() if _features_buildable(c)]
-
-
-def geometry_interchanges():
-    """(class_id, sample) of every interchange to build (used by the export rules)."""
-    path = checkpoints.geometry_plan.get().output.plan
-    plan = json.loads(Path(path).read_text(encoding="utf-8"))
-    return [(c, int(s)) for c, samples in sorted(plan.items()) for s in samples]
-
-
-def geometry_tables(wildcards):
-    return [f"results/interchanges/{c}/{s}/geometry.parquet" for c, s in geometry_interchanges()]
+# only its own interchanges (plus the plan and the aggregate table). Helpers: common.smk.
 
 
 checkpoint geometry_plan:
@@ -39,6 +15,8 @@ checkpoint geometry_plan:
         plan="results/geometry/plan.json",
     log:
         "logs/geometry/plan.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=GEOMETRY_VERSION,
     script:
@@ -55,6 +33,8 @@ rule geometry:
         table="results/interchanges/{class_id}/{sample}/geometry.parquet",
     log:
         "logs/geometry/{class_id}/{sample}.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=GEOMETRY_VERSION,
         settings=config["geometry"],
@@ -74,6 +54,8 @@ rule geometry_table:
         table="results/geometry.parquet",
     log:
         "logs/geometry.log",
+    conda:
+        "../envs/flyover.yaml"
     params:
         version=GEOMETRY_VERSION,
     script:
