@@ -11,12 +11,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.integrate import quad
 
 __all__ = ["ParamPoly3", "Line", "BezierChain", "bezier_to_parampoly3", "split_bezier",
            "bezier_length"]
-
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(32)
-
 
 def _deriv(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     t = np.asarray(t, dtype=float)[:, None]
@@ -28,14 +26,22 @@ def _point(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     return (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t ** 2 * p[2] + t ** 3 * p[3]
 
 
-def bezier_length(p: np.ndarray, t0: float = 0.0, t1: float = 1.0, parts: int = 8) -> float:
-    """Arc length of a cubic Bézier between parameters ``t0`` and ``t1`` (composite Gauss–Legendre)."""
-    edges = np.linspace(t0, t1, parts + 1)
-    total = 0.0
-    for a, b in zip(edges, edges[1:]):
-        t = 0.5 * (b - a) * _GL_X + 0.5 * (a + b)
-        total += 0.5 * (b - a) * float(np.sum(_GL_W * np.linalg.norm(_deriv(p, t), axis=1)))
-    return total
+def bezier_length(p: np.ndarray, t0: float = 0.0, t1: float = 1.0) -> float:
+    """Arc length of a cubic Bézier between parameters ``t0`` and ``t1``.
+
+    Adaptive quadrature (the speed may come close to zero on tight pieces,
+    where fixed-order rules lose millimetres); better than 1e-6 m.
+    """
+    p = np.asarray(p, dtype=float)
+    b = 3 * (p[1] - p[0])
+    c = 3 * (p[0] - 2 * p[1] + p[2])
+    d = -p[0] + 3 * p[1] - 3 * p[2] + p[3]
+
+    def speed(t: float) -> float:
+        v = b + t * (2 * c + 3 * t * d)
+        return math.hypot(v[0], v[1])
+
+    return float(quad(speed, t0, t1, limit=200, epsabs=1e-9, epsrel=1e-12)[0])
 
 
 def split_bezier(p: np.ndarray, t0: float, t1: float) -> np.ndarray:
