@@ -211,3 +211,35 @@ def test_heading_is_direction_agnostic_in_continuity():
     assert not LinkGap("a", "b", 0.0, 0.02, 0.0).ok(0.01, 0.5)
     assert not LinkGap("a", "b", 0.0, 0.0, 0.6).ok(0.01, 0.5)
     assert LinkGap("a", "b", 0.0, 0.0, math.nan).ok(0.01, 0.5)
+
+
+def _two_roads(x1: float, y1: float, h1: float) -> bytes:
+    lanes = ('<lanes><laneSection s="0"><center><lane id="0" type="none"/></center><right>'
+             '<lane id="-1" type="driving">{link}<width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>'
+             '</right></laneSection></lanes>')
+    return (f'<OpenDRIVE><header revMajor="1" revMinor="7"/>'
+            f'<road id="1" length="100" junction="-1"><link><successor elementType="road" '
+            f'elementId="2" contactPoint="start"/></link><planView>'
+            f'<geometry s="0" x="0" y="0" hdg="0" length="50"><spiral curvStart="0" curvEnd="0.01"/></geometry>'
+            f'<geometry s="50" x="49.688402921" y="4.148102427" hdg="0.25" length="50"><arc curvature="0.01"/></geometry>'
+            f'</planView>' + lanes.format(link='<link><successor id="-1"/></link>') + '</road>'
+            f'<road id="2" length="10" junction="-1"><link><predecessor elementType="road" '
+            f'elementId="1" contactPoint="end"/></link><planView>'
+            f'<geometry s="0" x="{x1!r}" y="{y1!r}" hdg="{h1!r}" length="10"><line/></geometry></planView>'
+            + lanes.format(link='<link><predecessor id="-1"/></link>') + '</road></OpenDRIVE>').encode()
+
+
+def test_reader_follows_spirals_and_arcs_of_other_tools(tmp_path):
+    import io
+
+    from flyover.opendrive.reader import read_xodr as rx
+
+    probe = rx(io.BytesIO(_two_roads(0.0, 0.0, 0.0)))
+    # the end of the clothoid (Fresnel integrals) is where the arc record starts
+    x, y, _, h = (float(v[0]) for v in probe.roads["1"].reference(50.0 - 1e-7))
+    assert abs(h - 0.25) < 1e-6 and abs(x - 49.688402921) < 1e-5 and abs(y - 4.148102427) < 1e-5
+    x, y, _, h = (float(v[0]) for v in probe.roads["1"].reference(100.0))
+    good = rx(io.BytesIO(_two_roads(x, y, h)))
+    assert check_continuity(good)[0]
+    bad = rx(io.BytesIO(_two_roads(x + 0.02, y, h)))
+    assert not check_continuity(bad)[0]
