@@ -64,6 +64,7 @@ class Rail:
     offset_m: float
     lo: float
     hi: float
+    straight: bool = False
 
     @classmethod
     def line(cls, parent: str, label: str, origin, heading: float, z: float, offset_m: float,
@@ -71,7 +72,8 @@ class Rail:
         """A rail along a straight line through ``origin`` (``s`` = signed distance)."""
         s = np.array([min(lo, -1e4), max(hi, 1e4)])
         xy = np.asarray(origin, float) + s[:, None] * heading_vec(heading)
-        return cls(parent, label, s, xy, np.full(2, heading), np.full(2, z), offset_m, lo, hi)
+        return cls(parent, label, s, xy, np.full(2, heading), np.full(2, z), offset_m, lo, hi,
+                   straight=True)
 
     def at(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Points ``(P, 2)`` (offset applied), headings and heights at stations ``s``."""
@@ -151,6 +153,8 @@ class FitSettings:
     end_zone_m: float = 15.0
     margin_m: float = 0.5
     inf_reference_m: float = 250.0
+    compact_m: float = 500.0
+    compact_weight: float = 0.02
     samples: int = 24
     vectorized: bool = True
 
@@ -355,17 +359,26 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
         conf = _conflicts(spec, smp.xy, smp.tangent, smp.s, z, length, obstacles, settings)
         r_eff = min(r_t, settings.inf_reference_m)
         chord = np.hypot(dec.b[0] - dec.a[0], dec.b[1] - dec.a[1])
+        chord = np.where(np.abs(dec.turn) < 0.3, chord, 0.0)  # straight-on ramps only
         l_ref = 1.2 * np.maximum(np.maximum(need, chord),
                                  r_eff * np.abs(dec.turn) + 2 * settings.transition_m)
         excess = np.clip(length / l_ref - 1.0, 0, None)
+        # stubs (a free end: they split or merge later) are pulled gently toward the
+        # centre, so that the ramps joining them stay compact
+        spread = 0 * length
+        for rail, s_att in ((spec.start, dec.sa), (spec.end, dec.sb)):
+            if rail is not None and rail.straight and spec.free is not None:
+                spread = spread + (s_att / settings.compact_m) ** 2
         return {"rad_err": rad_err, "smooth": smooth, "shortfall": shortfall, "excess": excess,
+                "spread": spread,
                 "turn_err": turn_err, "g2": g2, "conflicts": conf}
 
     def f(x: np.ndarray) -> np.ndarray:
         t = terms(x)
         return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
                 + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.5 * t["conflicts"]
-                + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2)
+                + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2
+                + settings.compact_weight * t["spread"])
 
     return f, terms
 

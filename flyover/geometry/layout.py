@@ -285,7 +285,7 @@ class _Builder:
         return pos is None or pos >= 0.4
 
     def _road_rail(self, road: str, ramp: str, label: Label, is_start: bool, loop: bool,
-                   pos: float | None, width: float) -> Rail:
+                   pos: float | None, width: float, extra: float = 0.0) -> Rail:
         r, st = self.roads[road], self.st
         if label in (Label.OUT_M, Label.IN_M):
             off = 0.0
@@ -295,7 +295,7 @@ class _Builder:
             off = width
         other = max([x.half_width for x in self.roads.values() if x.expressway != r.expressway]
                     or [0.0])
-        tz = other + st.crossing_margin_m
+        tz = other + st.crossing_margin_m + extra
         if self._same_road(ramp):  # collector-distributor: leave room for what attaches to it
             tz += st.cd_clear_m
         if label is Label.OUT_M or (pos is not None and pos >= 0.99 and np.isfinite(r.t_hi)):
@@ -381,15 +381,19 @@ class _Builder:
             else:
                 z1 = self._end_z(end)
                 zf = z1 + (self._goal_z(ramp, False) - z1) / 3.0
-                lat = (-lat[1], -lat[0]) if sgn else lat
             free = FreeEnd((60.0, 400.0), lat, (-np.pi / 4, np.pi / 4), zf)
         else:
             raw = _wrap(h_b - h_a)
             loop = self._is_loop(ramp, raw)
         turn = raw - 2 * np.pi if loop else raw
         pieces = 2 if (abs(turn) > 2.2 or abs(turn) < 0.3) else 1
-        a = self._rail(ramp, start, True, loop, width) if start else None
-        b = self._rail(ramp, end, False, loop, width) if end else None
+        # a direct left turn crosses the other roads: leave room to climb / descend a level
+        extra = 0.0
+        if start is not None and end is not None and not loop and raw > 1.0:
+            g = max(feat.slope_pct, 0.5) / 100.0
+            extra = st.level_height_m / g + st.fit.transition_m
+        a = self._rail(ramp, start, True, loop, width, extra) if start else None
+        b = self._rail(ramp, end, False, loop, width, extra) if end else None
         z_a = self._end_z(start) if start else free.z
         z_b = self._end_z(end) if end else free.z
         crest = None
@@ -415,11 +419,11 @@ class _Builder:
         st = self.rails[node]
         return float(np.mean(st["z"]))  # refined per candidate by the rail
 
-    def _rail(self, ramp, end, is_start, loop, width) -> Rail:
+    def _rail(self, ramp, end, is_start, loop, width, extra=0.0) -> Rail:
         node, label = end
         if node in self.roads:
             pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
-            return self._road_rail(node, ramp, label, is_start, loop, pos, width)
+            return self._road_rail(node, ramp, label, is_start, loop, pos, width, extra)
         return self._ramp_rail(node, label, is_start, width)
 
     def obstacles(self) -> Obstacles:
