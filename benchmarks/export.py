@@ -3,7 +3,12 @@
 Usage::
 
     .venv/bin/python benchmarks/export.py results/interchanges/*/*/geometry.json
-    .venv/bin/python benchmarks/export.py --samples          # the built-in loop/flyover/T/fork
+    .venv/bin/python benchmarks/export.py --samples          # the built-in loop/flyover/T/fork/y
+    .venv/bin/python benchmarks/export.py --catalog 1        # every catalog design, built here
+
+``--catalog SEED`` lays out every catalog design with the geometry stage
+(``build_interchange``; fixed targets 120 m / 4 %, a short DE run: maxiter
+120, no resampling; the export does not depend on how well targets are met).
 
 For every ``geometry.json``: the seconds to write the ``.xodr`` (writer only),
 the seconds of ``netconvert``, and every check of ``flyover validate`` (XSD,
@@ -59,10 +64,26 @@ def run(items, keep: Path | None) -> int:
     return 0 if n and all(passed[c] == n for c in CHECKS) else 1
 
 
+def catalog_items(seed: int) -> list:
+    """(name, geometry) of every catalog design, laid out by the geometry stage."""
+    from flyover.geometry.fit import FitSettings
+    from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
+    from flyover.topology.catalog import catalog_topologies
+
+    st = LayoutSettings(max_resamples=0, fit=FitSettings(maxiter=120, min_generations=10))
+    out = []
+    for name, topo in catalog_topologies().items():
+        feats = {r: RampFeatures(120.0, 4.0) for r in topo.ramps}
+        out.append((name, build_interchange(topo, {}, feats, class_id=name, sample=0, seed=seed,
+                                            settings=st).geometry))
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("geometry", nargs="*", help="geometry.json files")
     ap.add_argument("--samples", action="store_true", help="the built-in small interchanges")
+    ap.add_argument("--catalog", type=int, metavar="SEED", help="build the catalog designs first")
     ap.add_argument("--keep", type=Path, help="keep the .xodr files in this folder")
     a = ap.parse_args(argv)
     items = []
@@ -70,6 +91,8 @@ def main(argv=None) -> int:
         from flyover.opendrive.samples import SAMPLES, sample_geometry
 
         items += [(k, sample_geometry(k)) for k in SAMPLES]
+    if a.catalog is not None:
+        items += catalog_items(a.catalog)
     for p in a.geometry:
         g = read_geometry(p)
         items.append((str(Path(p).parent), g))
