@@ -302,12 +302,13 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
     inner = (s > settings.end_zone_m) & (s < length[:, None] - settings.end_zone_m)
     hw = 0.5 * spec.width_m - settings.margin_m
     bad = np.zeros(s.shape, bool)
-    for x0, y0, dx, dy, tlo, thi, llo, lhi, zl in obstacles.lines:
-        rx, ry = c[..., 0] - x0, c[..., 1] - y0
+    if len(obstacles.lines):  # all roads at once: (..., N, L)
+        x0, y0, dx, dy, tlo, thi, llo, lhi, zl = obstacles.lines.T
+        rx, ry = c[..., 0, None] - x0, c[..., 1, None] - y0
         along = rx * dx + ry * dy
         lat = dx * ry - dy * rx
         hit = (along > tlo) & (along < thi) & (lat > llo - hw) & (lat < lhi + hw)
-        bad |= hit & (np.abs(z - zl) < settings.clearance_m)
+        bad |= (hit & (np.abs(z[..., None] - zl) < settings.clearance_m)).any(-1)
     if len(obstacles.points):
         flat = c.reshape(-1, 2)
         reach = hw + float(obstacles.half_width.max())
@@ -374,12 +375,15 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
                 "turn_err": turn_err, "g2": g2, "conflicts": conf}
 
     def f(x: np.ndarray) -> np.ndarray:
-        t = terms(x)
+        return combine(terms(x))
+
+    def combine(t: dict[str, np.ndarray]) -> np.ndarray:
         return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
                 + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.5 * t["conflicts"]
                 + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2
                 + settings.compact_weight * t["spread"])
 
+    f.combine = combine
     return f, terms
 
 
@@ -403,17 +407,29 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
     obstacles = obstacles or Obstacles()
     settings = settings or FitSettings()
     f, terms = ramp_objective(spec, obstacles, settings)
+    combine = f.combine
     b = bounds(spec)
     gen = [0]
     count = [0]
 
+    # candidates meeting the acceptance test on the coarse samples; only these
+    # are checked again on fine samples when DE reports them as its best
+    coarse_good: set[bytes] = set()
+
     def counted(x: np.ndarray) -> np.ndarray:
         count[0] += x.shape[1]
-        return f(x)
+        t = terms(x)
+        ok = ((np.abs(t["rad_err"]) < settings.accept_radius) & (t["shortfall"] == 0)
+              & (t["turn_err"] < 0.05) & (t["conflicts"] == 0) & (t["excess"] < 0.3))
+        for j in np.flatnonzero(ok):
+            coarse_good.add(np.ascontiguousarray(x[:, j]).tobytes())
+        return combine(t)
 
     _, fine_terms = ramp_objective(spec, obstacles, replace(settings, samples=64))
 
     def good(xk: np.ndarray) -> bool:
+        if np.ascontiguousarray(xk, float).tobytes() not in coarse_good:
+            return False
         t = fine_terms(xk[:, None])
         return bool(np.abs(t["rad_err"][0]) < settings.accept_radius and t["shortfall"][0] == 0
                     and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0
