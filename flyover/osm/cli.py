@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
+
+from flyover.cli_output import print_json, report_errors
 
 __all__ = ["register"]
 
@@ -57,10 +58,7 @@ def _osm(args) -> int:
                 row["picture"] = str(png)
             rows.append(row)
     if args.json:
-        json.dump({"interchanges": rows,
-                   "rejected": [{"source_file": e.source, "element": e.element, "reason": e.reason}
-                                for e in errors]}, sys.stdout, indent=2)
-        print()
+        print_json(rows, errors)
     else:
         for r in rows:
             design = r["catalog_design"] or "no catalog design"
@@ -71,6 +69,4 @@ def _osm(args) -> int:
             if args.notes:
                 for note in r["notes"]:
                     print(f"    note: {note}")
-    for exc in errors:
-        print(f"error: {exc.one_line()}", file=sys.stderr)
-    return 1 if errors else 0
+    return report_errors(errors)

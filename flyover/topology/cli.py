@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
+
+from flyover.cli_output import print_json, report_errors
 
 __all__ = ["register"]
 
@@ -36,17 +37,11 @@ def _load(paths):
     return topologies, errors
 
 
-def _report_errors(errors) -> int:
-    for exc in errors:
-        print(f"error: {exc.one_line()}", file=sys.stderr)
-    return 1 if errors else 0
-
-
 def _check(args) -> int:
     topologies, errors = _load(args.files)
     for t in topologies:
         print(f"{t.source}: {t.summary()}")
-    return _report_errors(errors)
+    return report_errors(errors)
 
 
 def _classify(args) -> int:
@@ -61,13 +56,10 @@ def _classify(args) -> int:
     ]
     rows.sort(key=lambda r: (str(r["source_file"]), r["interchange"]))
     if args.json:
-        json.dump({"interchanges": rows,
-                   "rejected": [{"source_file": e.source, "element": e.element, "reason": e.reason}
-                                for e in errors]}, sys.stdout, indent=2)
-        print()
+        print_json(rows, errors)
     else:
         for r in rows:
             print(f"{r['source_file']}: {r['interchange']}: {r['class_id']} {r['class_name']} "
                   f"({r['n_roads']} roads, {r['n_ramps']} ramps, {r['shape']})")
         print(f"{len(rows)} interchanges in {len(classes)} classes", file=sys.stderr)
-    return _report_errors(errors)
+    return report_errors(errors)
