@@ -253,6 +253,58 @@ class _Builder:
         self.rails: dict[str, dict] = {}  # fitted ramp → stations
         self.attached: dict[str, list[tuple[float, float]]] = {}  # parent → (pos, t)
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
+        self.plan = self._level_plan()
+
+    def _level_plan(self) -> dict[str, float]:
+        """Crest heights fixed up front: direct left turns of a four-leg design.
+
+        A direct left turn crosses both expressways, so it passes over the
+        higher one by the clearance; the left turns leaving the second
+        expressway go one level higher still (they cross those of the first):
+        the two flyover levels of a four-level stack.
+        """
+        topo, st = self.topo, self.st
+        if any(np.isfinite(r.t_lo) or np.isfinite(r.t_hi) for r in self.roads.values()):
+            return {}  # a T: levels are found by lifting
+        top = max(r.z for r in self.roads.values())
+        levels = [z for z in st.levels_m if z >= top + st.fit.clearance_m - 1e-6]
+        if not levels:
+            return {}
+        plan = {}
+        for ramp in topo.ramps:
+            start, end = _ends(topo, ramp)
+            a, b = _road_of(topo, ramp, False), _road_of(topo, ramp, True)
+            if start is None or end is None or not a or not b:
+                continue
+            raw = _wrap(self.roads[b].heading - self.roads[a].heading)
+            if raw > 1.0 and not self._is_loop(ramp, raw):
+                k = min(self.roads[a].level, len(levels) - 1)
+                plan[ramp] = float(levels[k])
+        return plan
+
+    def _stub_kids(self, ramp: str) -> list[str]:
+        g = self.g
+        return [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out] + \
+            [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
+
+    def _stub_z(self, ramp: str, z_road: float, zf: float) -> float:
+        """Height of a stub's free end: the clearance toward its planned children's crest
+        (so that they clear the roads near the stub), else ``zf``."""
+        crests = [self.plan[k] for k in self._stub_kids(ramp) if k in self.plan]
+        if not crests:
+            return zf
+        c = max(crests)
+        return float(min(c, z_road + self.st.fit.clearance_m)) if c > z_road else zf
+
+    def _stub_extra(self, ramp: str, zf: float) -> float:
+        """Room a stub leaves so that its planned children can climb to their crest."""
+        kids = self._stub_kids(ramp)
+        extra = 0.0
+        for k in kids:
+            if k in self.plan and k in self.features:
+                gk = max(self.features[k].slope_pct, 0.5) / 100.0
+                extra = max(extra, abs(self.plan[k] - zf) / gk + self.st.fit.transition_m)
+        return extra
 
     def _lanes(self, ramp: str) -> int:
         start, end = _ends(self.topo, ramp)
@@ -377,18 +429,22 @@ class _Builder:
             lat = (sorted((sgn * 3.0, sgn * 40.0)) if sgn else (-10.0, 10.0))
             if end is None:  # split stub: free end
                 z0 = self._end_z(start)
-                zf = z0 + (self._goal_z(ramp, True) - z0) / 3.0
+                zf = self._stub_z(ramp, z0, z0 + (self._goal_z(ramp, True) - z0) / 3.0)
             else:
                 z1 = self._end_z(end)
-                zf = z1 + (self._goal_z(ramp, False) - z1) / 3.0
+                zf = self._stub_z(ramp, z1, z1 + (self._goal_z(ramp, False) - z1) / 3.0)
             free = FreeEnd((60.0, 400.0), lat, (-np.pi / 4, np.pi / 4), zf)
+            stub_extra = self._stub_extra(ramp, zf)
+            if stub_extra > 0:  # the free end keeps that room from the crossing
+                free = replace(free, forward=(60.0, 250.0))
+                stub_extra += 250.0
         else:
             raw = _wrap(h_b - h_a)
             loop = self._is_loop(ramp, raw)
         turn = raw - 2 * np.pi if loop else raw
         pieces = 2 if (abs(turn) > 2.2 or abs(turn) < 0.3) else 1
         # a direct left turn crosses the other roads: leave room to climb / descend a level
-        extra = 0.0
+        extra = stub_extra if free is not None else 0.0
         if start is not None and end is not None and not loop and raw > 1.0:
             g = max(feat.slope_pct, 0.5) / 100.0
             extra = st.level_height_m / g + st.fit.transition_m
@@ -396,7 +452,7 @@ class _Builder:
         b = self._rail(ramp, end, False, loop, width, extra) if end else None
         z_a = self._end_z(start) if start else free.z
         z_b = self._end_z(end) if end else free.z
-        crest = None
+        crest = self.plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest)
 
