@@ -117,6 +117,12 @@ class Obstacles:
     line_names: tuple[str, ...] = ()
 
     @cached_property
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners ``(x, y, z)`` of :attr:`points`."""
+        pts = np.column_stack([self.points, self.z])
+        return pts.min(0), pts.max(0)
+
+    @cached_property
     def tree(self) -> cKDTree:
         """KD-tree of :attr:`points` (built once)."""
         return cKDTree(self.points)
@@ -155,6 +161,7 @@ class FitSettings:
     inf_reference_m: float = 250.0
     compact_m: float = 500.0
     compact_weight: float = 0.02
+    patience: int = 60
     samples: int = 24
     vectorized: bool = True
 
@@ -310,16 +317,26 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
         hit = (along > tlo) & (along < thi) & (lat > llo - hw) & (lat < lhi + hw)
         bad |= (hit & (np.abs(z[..., None] - zl) < settings.clearance_m)).any(-1)
     if len(obstacles.points):
-        flat = c.reshape(-1, 2)
         reach = hw + float(obstacles.half_width.max())
-        dist, idx = obstacles.tree.query(flat, k=min(4, len(obstacles.points)),
-                                         distance_upper_bound=reach)
-        dist, idx = dist.reshape(len(flat), -1), idx.reshape(len(flat), -1)
-        found = np.isfinite(dist)
-        j = np.where(found, idx, 0)
-        near = found & (dist < hw + obstacles.half_width[j])
-        low = np.abs(z.reshape(-1, 1) - obstacles.z[j]) < settings.clearance_m
-        bad |= (near & low).any(-1).reshape(bad.shape)
+        lo, hi = obstacles.box
+        # only inner samples near the obstacles' box and height range can meet them
+        zz = np.broadcast_to(z, s.shape)
+        cand = (inner & (zz > lo[2] - settings.clearance_m) & (zz < hi[2] + settings.clearance_m)
+                & (c[..., 0] > lo[0] - reach) & (c[..., 0] < hi[0] + reach)
+                & (c[..., 1] > lo[1] - reach) & (c[..., 1] < hi[1] + reach) & ~bad)
+        sel = np.flatnonzero(cand.ravel())
+        if len(sel):
+            flat = c.reshape(-1, 2)[sel]
+            dist, idx = obstacles.tree.query(flat, k=min(4, len(obstacles.points)),
+                                             distance_upper_bound=reach)
+            dist, idx = dist.reshape(len(flat), -1), idx.reshape(len(flat), -1)
+            found = np.isfinite(dist)
+            j = np.where(found, idx, 0)
+            near = found & (dist < hw + obstacles.half_width[j])
+            low = np.abs(zz.reshape(-1)[sel][:, None] - obstacles.z[j]) < settings.clearance_m
+            hit = np.zeros(bad.size, bool)
+            hit[sel] = (near & low).any(-1)
+            bad |= hit.reshape(bad.shape)
     return (bad & inner).sum(-1)
 
 
@@ -435,8 +452,15 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
                     and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0
                     and t["excess"][0] < 0.3)
 
+    best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
+
     def stop(intermediate_result) -> bool:
         gen[0] += 1
+        fun = float(intermediate_result.fun)
+        if fun < best[0] - 0.01 * abs(best[0]) or not np.isfinite(best[0]):
+            best[0], best[1] = fun, gen[0]
+        elif settings.patience and gen[0] - best[1] >= settings.patience:
+            return True  # stagnated: more generations will not meet the targets
         return gen[0] >= settings.min_generations and good(intermediate_result.x)
 
     t0 = time.perf_counter()
