@@ -162,6 +162,7 @@ class FitSettings:
     compact_m: float = 500.0
     compact_weight: float = 0.02
     patience: int = 60
+    conflict_weight: float = 2.0
     samples: int = 24
     vectorized: bool = True
 
@@ -396,7 +397,7 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
 
     def combine(t: dict[str, np.ndarray]) -> np.ndarray:
         return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
-                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + 0.5 * t["conflicts"]
+                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + settings.conflict_weight * t["conflicts"]
                 + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2
                 + settings.compact_weight * t["spread"])
 
