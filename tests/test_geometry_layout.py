@@ -135,3 +135,30 @@ def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
     assert not o.first_try_ok and o.resamples == 0 and calls == []
     assert "level ramp" in o.infeasible and not o.fit.ok
     assert ic.geometry.ramp("c").infeasible == o.infeasible
+
+
+def test_stack_level_plan_puts_left_turns_over_the_roads_on_two_flyover_levels():
+    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+
+    t = catalog_topologies()["stack4"]
+    st = LayoutSettings()
+    feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
+    b = _Builder(t, {r: 2 for r in t.roads}, feats, st, 1)
+    assert set(b.plan) == {"lA1", "lA2", "lB1", "lB2"}  # right turns and stubs: no plan
+    top = max(r.z for r in b.roads.values())
+    for ramp, z in b.plan.items():
+        assert z >= top + st.fit.clearance_m
+    # the two pairs of left turns cross each other: levels one clearance apart
+    assert abs(b.plan["lA1"] - b.plan["lB1"]) >= st.fit.clearance_m
+    # a stub feeding a planned left turn leaves its road by the clearance toward it
+    spec = b.spec("eA1", feats["eA1"])
+    assert spec.free.z == pytest.approx(b.roads["A1"].z + st.fit.clearance_m)
+
+
+def test_cloverleaf_has_no_level_plan():
+    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverleaf"]
+    b = _Builder(t, {r: 2 for r in t.roads}, {r: RampFeatures(150.0, 4.0) for r in t.ramps},
+                 LayoutSettings(), 1)
+    assert b.plan == {}
