@@ -17,6 +17,9 @@ Objective (whole population at once, numpy): curvature variance + radius
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
 and already fitted ramps, and curvature jumps at joints (G2 preferred).
+The search stops as soon as the best candidate meets the targets on fine
+samples (after ``min_generations``), or after ``patience`` generations
+without a 1 % improvement (it will not meet them).
 
 Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
 of the reference line). A target of ``inf`` on a ramp that has to turn means

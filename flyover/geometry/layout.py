@@ -23,6 +23,12 @@ Layout
 * A stub ramp with no end (it splits into other ramps) or no start (formed
   by merging ramps) gets a free end; it climbs a third of the height between
   its road and its children's roads, so every ramp of a chain climbs.
+* Level plan (fixed up front, four-leg designs): a direct left turn crosses
+  both expressways, so its crest is the lowest level ``clearance_m`` above the
+  highest road; left turns leaving the second expressway go one level higher
+  (they cross those of the first: a four-level stack). A stub feeding or fed
+  by such a ramp ends ``clearance_m`` from its road toward that crest and
+  attaches far enough out for the ramp to climb before the crossing.
 
 Ramps are fitted one by one (parents first) by :func:`flyover.geometry.fit.fit_ramp`,
 avoiding same-level conflicts with roads and the ramps already fitted; a ramp
