@@ -128,6 +128,25 @@ def test_continuity_check_catches_a_gap(xodrs, tmp_path):
     assert " 0 off" not in detail and "xy 0.05" in detail
 
 
+@pytest.mark.parametrize("kind", SAMPLES)
+def test_lane_headings_are_read_without_finite_difference_error(xodrs, kind):
+    # lanes tapering with cubic widths up to a link once read as a 0.56 deg kink
+    from flyover.opendrive.continuity import lane_link_gaps
+    gaps = lane_link_gaps(read_xodr(xodrs[kind]))
+    assert gaps and max(g.heading_deg for g in gaps) < 0.05
+
+
+def test_continuity_check_catches_a_heading_kink(xodrs, tmp_path):
+    doc = etree.parse(str(xodrs["loop"]))
+    geo = next(r for r in doc.iter("road") if r.get("name") == "r1").find("planView/geometry")
+    geo.set("hdg", repr(float(geo.get("hdg")) + math.radians(1.0)))
+    bad = tmp_path / "kink.xodr"
+    doc.write(str(bad))
+    ok, detail = check_continuity(read_xodr(bad))
+    assert not ok
+    assert "heading 1.0" in detail
+
+
 def test_continuity_check_catches_a_height_step(xodrs, tmp_path):
     doc = etree.parse(str(xodrs["flyover"]))
     road = next(r for r in doc.iter("road") if r.get("name") == "B1")

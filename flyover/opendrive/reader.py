@@ -210,12 +210,18 @@ class XodrRoad:
         p = at(s)
         if p is None:
             return None
-        eps = min(0.05, self.length / 4)
-        s0, s1 = (s - eps, s) if at_end or s >= self.length - 1e-9 else (s, s + eps)
-        a, b = at(max(s0, 0.0)), at(min(s1, self.length))
+        # tangent by a one-sided three-point difference (exact for quadratics):
+        # a two-point difference reads the mean slope over the step and errs by
+        # ~0.5 deg where inner lanes taper with cubic widths up to the link
+        h = min(0.02, self.length / 8)
+        step = -h if at_end or s >= self.length - 1e-9 else h
+        a = at(min(max(s + step, 0.0), self.length))
+        b = at(min(max(s + 2 * step, 0.0), self.length))
         if a is None or b is None:
             return (*p, float("nan"))
-        return (*p, math.atan2(b[1] - a[1], b[0] - a[0]))
+        dx = (-3 * p[0] + 4 * a[0] - b[0]) * math.copysign(1, step)
+        dy = (-3 * p[1] + 4 * a[1] - b[1]) * math.copysign(1, step)
+        return (*p, math.atan2(dy, dx))
 
 
 @dataclass(frozen=True)
