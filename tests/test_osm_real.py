@@ -5,6 +5,8 @@ Skipped where that folder does not exist.
 
 from __future__ import annotations
 
+import os
+
 from pathlib import Path
 from xml.etree.ElementTree import iterparse
 
@@ -15,7 +17,9 @@ from flyover.osm import OsmOptions, read_osm_topologies
 from flyover.topology import Kind, class_id
 from flyover.topology.catalog import catalog_topologies
 
-OSM_DIR = Path(__file__).resolve().parents[2] / "shared" / "osm"
+#: the team's shared extracts: FLYOVER_OSM_DIR, else ../shared/osm beside the checkout
+OSM_DIR = Path(os.environ.get("FLYOVER_OSM_DIR")
+               or Path(__file__).resolve().parents[2] / "shared" / "osm")
 pytestmark = pytest.mark.skipif(not OSM_DIR.is_dir(), reason=f"no real OSM extracts at {OSM_DIR}")
 CATALOG = catalog_topologies()
 
