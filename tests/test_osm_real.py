@@ -6,7 +6,6 @@ Skipped where that folder does not exist.
 from __future__ import annotations
 
 import os
-
 from pathlib import Path
 from xml.etree.ElementTree import iterparse
 
