@@ -19,6 +19,7 @@ rule all:
     input:
         "results/classes.parquet",
         "results/rejected.parquet",
+        "results/classes/manifest.json",
         class_topology_outputs,
         "results/validation.parquet",
         "results/geometry.parquet",

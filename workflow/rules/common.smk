@@ -55,6 +55,11 @@ def class_representative(wildcards):
     return class_manifest()["classes"][wildcards.class_id]["representative"]
 
 
+def class_name(wildcards):
+    """The readable name of a class (catalog design or shape-roads-ramps)."""
+    return class_manifest()["classes"][wildcards.class_id]["class_name"]
+
+
 def class_topology_outputs(wildcards):
     return expand(
         "results/classes/{class_id}/topology.{ext}",

@@ -53,6 +53,7 @@ rule class_topology:
         "../envs/flyover.yaml"
     params:
         version=TOPOLOGY_VERSION,
+        name=class_name,
     script:
         "../scripts/class_topology.py"
 
@@ -62,4 +63,5 @@ rule topology:
     input:
         "results/classes.parquet",
         "results/rejected.parquet",
+        "results/classes/manifest.json",
         class_topology_outputs,

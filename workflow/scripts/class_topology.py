@@ -7,4 +7,5 @@ setup_logging(snakemake.log[0])
 topology = read_graphml(snakemake.input[0])
 topology.name = snakemake.wildcards.class_id
 write_graphml(topology, snakemake.output.graphml)
-draw_topology(topology, snakemake.output.png, title=snakemake.wildcards.class_id)
+title = f"{snakemake.params.name} ({snakemake.wildcards.class_id})"
+draw_topology(topology, snakemake.output.png, title=title)
