@@ -24,7 +24,7 @@ from functools import lru_cache
 
 from flyover.topology.model import Kind, Label, Topology
 
-__all__ = ["canonical_form", "canonical_labeling", "class_id", "class_id_of_form", "CanonicalForm"]
+__all__ = ["canonical_form", "canonical_labeling", "labeling_with_invariant", "class_id", "class_id_of_form", "CanonicalForm"]
 
 #: (node kinds in canonical order, sorted edges as (i, j, label))
 CanonicalForm = tuple[tuple[str, ...], tuple[tuple[int, int, str], ...]]
@@ -104,6 +104,12 @@ def canonical_labeling(topology: Topology) -> tuple[CanonicalForm, tuple[str, ..
     >>> canonical_form(t) == canonical_form(u)
     True
     """
+    form, order, _ = labeling_with_invariant(topology)
+    return form, order
+
+
+def _encode(topology: Topology):
+    """Nodes (sorted), kind codes, labeled out/in adjacency and edge list, by node index."""
     g = topology.graph
     nodes = sorted(g.nodes)
     index = {v: i for i, v in enumerate(nodes)}
@@ -116,13 +122,29 @@ def canonical_labeling(topology: Topology) -> tuple[CanonicalForm, tuple[str, ..
         outs[index[u]].append((index[v], lab))
         ins[index[v]].append((index[u], lab))
         edges.append((index[u], index[v], lab))
+    return nodes, kinds, outs, ins, edges
+
+
+def labeling_with_invariant(topology: Topology) -> tuple[CanonicalForm, tuple[str, ...], tuple]:
+    """:func:`canonical_labeling` plus a cheap invariant from the same refinement.
+
+    The invariant (sizes and the stable colour histogram with labeled
+    out-neighbour colours) is equal for isomorphic topologies; classification
+    buckets by it.
+    """
+    g = topology.graph
+    nodes, kinds, outs, ins, edges = _encode(topology)
+    colors = _refine(kinds, outs, ins)
+    invariant = (len(nodes), len(edges),
+                 tuple(sorted((colors[i], tuple(sorted((lab, colors[w]) for w, lab in outs[i])))
+                              for i in range(len(nodes)))))
     best: list = [None, None]
-    _search(_refine(kinds, outs, ins), outs, ins, edges, best)
+    _search(colors, outs, ins, edges, best)
     order = sorted(range(len(nodes)), key=lambda i: best[1][i])
     labels = list(Label)
     kind_names = tuple(g.nodes[nodes[i]]["kind"].value for i in order)
     form = (kind_names, tuple((u, v, labels[lab].value) for u, v, lab in best[0]))
-    return form, tuple(nodes[i] for i in order)
+    return form, tuple(nodes[i] for i in order), invariant
 
 
 @lru_cache(maxsize=None)

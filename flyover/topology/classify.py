@@ -24,13 +24,7 @@ from typing import Sequence
 
 from networkx.algorithms import isomorphism as iso
 
-from flyover.topology.canonical import (
-    _KIND_CODE,
-    _LABEL_CODE,
-    _refine,
-    canonical_labeling,
-    class_id_of_form,
-)
+from flyover.topology.canonical import class_id_of_form, labeling_with_invariant
 from flyover.topology.catalog import catalog_class_names
 from flyover.topology.model import Topology
 
@@ -69,18 +63,7 @@ class TopologyClass:
 
 def invariant(topology: Topology) -> tuple:
     """An isomorphism invariant: sizes and the refined colour histogram with edge labels."""
-    g = topology.graph
-    nodes = sorted(g.nodes)
-    index = {v: i for i, v in enumerate(nodes)}
-    outs: list[list] = [[] for _ in nodes]
-    ins: list[list] = [[] for _ in nodes]
-    for u, v, d in g.edges(data=True):
-        outs[index[u]].append((index[v], _LABEL_CODE[d["label"]]))
-        ins[index[v]].append((index[u], _LABEL_CODE[d["label"]]))
-    colors = _refine([_KIND_CODE[g.nodes[v]["kind"]] for v in nodes], outs, ins)
-    sig = tuple(sorted((colors[i], tuple(sorted((lab, colors[w]) for w, lab in outs[i])))
-                       for i in range(len(nodes))))
-    return len(nodes), g.number_of_edges(), sig
+    return labeling_with_invariant(topology)[2]
 
 
 def is_isomorphic(a: Topology, b: Topology) -> bool:
@@ -117,8 +100,8 @@ def classify(topologies: Sequence[Topology]) -> list[TopologyClass]:
     # invariant bucket -> canonical form -> [(topology, canonical node order)]
     buckets: dict[tuple, dict[tuple, list[tuple[Topology, tuple[str, ...]]]]] = {}
     for t in topologies:
-        form, order = canonical_labeling(t)
-        groups = buckets.setdefault(invariant(t), {})
+        form, order, key = labeling_with_invariant(t)
+        groups = buckets.setdefault(key, {})
         if form in groups:
             first, first_order = groups[form][0]
             if not is_isomorphism(first, t, dict(zip(first_order, order))):
