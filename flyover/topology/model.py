@@ -14,7 +14,7 @@ Example
 ...     connections=[Connection("A1", "r1", Label.OUT_R), Connection("r1", "B1", Label.IN_R)],
 ... )
 >>> t.n_roads, t.n_ramps, t.shape
-(2, 1, 'other')
+(2, 1, 'cross')
 """
 
 from __future__ import annotations
