@@ -1,0 +1,80 @@
+"""What the geometry stage knows up front about features no ramp of a kind can have.
+
+Issue 5 asks the geometry stage to report *systematic* infeasibility, so that
+sampling excludes it instead of asking for it again in every feature set. One
+case is known from the topology alone, before anything is fitted:
+
+**Level ramps.** A ramp whose start and end both attach to the same road (a
+collector-distributor road, e.g. ``cA1`` of the catalog's ``cloverleaf_cd``,
+which leaves a carriageway and rejoins it) is kept at that road's level by the
+layout (:mod:`flyover.geometry.layout`): both ends at one height, nothing to
+climb over. No sampled maximum slope (1..5 % in the paper's profile) can be
+met on it, so the slope of such a ramp is not a parameter of the covering
+array: it is *fixed* at 0 in every feature set (:func:`fixed_features`, used
+as ``fixed=`` of :func:`flyover.sampling.sample.sample_topology`).
+
+A slope target of **0** means *a level ramp*: its maximum longitudinal slope
+is 0, with the same tolerance as any other target (0.2 percentage points;
+:attr:`flyover.geometry.fit.RampFit.slope_ok` compares
+``|achieved - 0| <= 0.2``). The fit (:func:`flyover.geometry.fit.fit_ramp`)
+treats a target of 0 as "the ends must be at one height", which a same-road
+ramp always satisfies; a level ramp that had to be lifted over something
+would miss it and be reported as usual.
+
+Examples
+--------
+>>> from flyover.topology.catalog import catalog_topologies
+>>> sorted(level_ramps(catalog_topologies()["cloverleaf_cd"]))
+['cA1', 'cA2', 'cB1', 'cB2']
+>>> level_ramps(catalog_topologies()["j1"])
+frozenset()
+>>> fixed_features(catalog_topologies()["cloverleaf_cd"])[("cA1", Feature.SLOPE_PCT)]
+0.0
+"""
+
+from __future__ import annotations
+
+from flyover.geometry.layout import _ends
+from flyover.sampling.model import Feature
+from flyover.topology.model import Kind, Topology
+
+__all__ = ["LEVEL_SLOPE_PCT", "level_ramps", "fixed_features"]
+
+#: the slope target of a level ramp (percent)
+LEVEL_SLOPE_PCT = 0.0
+
+
+def level_ramps(topology: Topology) -> frozenset[str]:
+    """The ramps the layout necessarily keeps level: both ends on one road.
+
+    Parameters
+    ----------
+    topology
+        The interchange topology.
+
+    Returns
+    -------
+    frozenset of str
+        Ramp ids whose start (``Out-*``) and end (``In-*``) attach to the same
+        road, e.g. collector-distributor roads.
+    """
+    g = topology.graph
+    out = set()
+    for ramp in topology.ramps:
+        start, end = _ends(topology, ramp)
+        if start and end and start[0] == end[0] and g.nodes[start[0]]["kind"] is Kind.ROAD:
+            out.add(ramp)
+    return frozenset(out)
+
+
+def fixed_features(topology: Topology) -> dict[tuple[str, Feature], float]:
+    """The feature values geometry imposes on ``topology`` whatever the sample.
+
+    Returns
+    -------
+    dict
+        ``(element, feature) → value``: slope 0 for every level ramp
+        (:func:`level_ramps`). Sampling writes these values into every
+        feature row instead of covering them.
+    """
+    return {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT for r in sorted(level_ramps(topology))}
