@@ -23,7 +23,14 @@ does when it finds a combination infeasible for one class (``extra`` of
 :func:`feature_model`).
 
 For a topology, every (element, feature) is one parameter of the covering
-array, roads first, then ramps, each in id order.
+array, roads first, then ramps, each in id order, except **fixed** features:
+a value a later stage imposes whatever the sample (``fixed`` of
+:func:`feature_model`; e.g. slope 0 on a level ramp, see
+:mod:`flyover.geometry.feasibility`). A fixed feature is no column of the
+array (coverage counts only the real parameters) and its value is written
+into every feature row. A forbidden combination that names a fixed feature
+applies where the fixed value is among its values (and then constrains the
+rest of the combination), never where it is not.
 
 Examples
 --------
@@ -31,6 +38,10 @@ Examples
 >>> model = feature_model(catalog_topologies()["j1"], default_profile())
 >>> len(model.parameters), model.levels[:5]
 (12, (3, 3, 3, 3, 8))
+>>> fixed = feature_model(catalog_topologies()["j1"], default_profile(),
+...                       fixed={("r1", Feature.SLOPE_PCT): 0.0})
+>>> len(fixed.parameters), fixed.value("r1", Feature.SLOPE_PCT)
+(11, 0.0)
 """
 
 from __future__ import annotations
@@ -107,16 +118,22 @@ class Parameter:
 
 @dataclass(frozen=True, eq=False)
 class FeatureModel:
-    """The parameters of one topology under a profile, and the forbidden combinations."""
+    """The parameters of one topology under a profile, the forbidden combinations and the
+    fixed features (``(element, feature, value)``, not parameters: the same in every row)."""
 
     topology: Topology
     profile: Profile
     parameters: tuple[Parameter, ...]
     forbidden: tuple[Forbidden, ...]
+    fixed: tuple[tuple[str, Feature, float], ...] = ()
 
     @property
     def levels(self) -> tuple[int, ...]:
         return tuple(len(p.values) for p in self.parameters)
+
+    def value(self, element: str, feature: Feature) -> float | None:
+        """The fixed value of ``element``'s ``feature`` (``None`` if it is not fixed)."""
+        return next((v for e, f, v in self.fixed if e == element and f is feature), None)
 
     def elements(self) -> list[tuple[str, Kind]]:
         """Every road, then every ramp, in id order."""
@@ -239,8 +256,8 @@ def profile_from_config(config: Mapping[str, Any], name: str | None = None,
     return profile_from_dict(name, profiles[name], source)
 
 
-def feature_model(topology: Topology, profile: Profile,
-                  extra: Iterable[ForbidRule] = ()) -> FeatureModel:
+def feature_model(topology: Topology, profile: Profile, extra: Iterable[ForbidRule] = (),
+                  fixed: Mapping[tuple[str, Feature], float] | None = None) -> FeatureModel:
     """The parameters of ``topology`` under ``profile``.
 
     Parameters
@@ -251,23 +268,52 @@ def feature_model(topology: Topology, profile: Profile,
         Domains and forbidden combinations.
     extra
         More forbidden combinations (e.g. ones a later stage found infeasible).
+    fixed
+        ``(element, feature) → value`` held constant instead of sampled (e.g.
+        :func:`flyover.geometry.feasibility.fixed_features`); the value need
+        not be in the profile's domain.
+
+    Raises
+    ------
+    ConfigError
+        A fixed feature names an element that is not in the topology, or its
+        value is forbidden outright by a combination of fixed values.
     """
     model = FeatureModel(topology, profile, (), ())
+    kinds = dict(model.elements())
+    pinned: dict[tuple[str, Feature], float] = {}
+    for (element, feature), value in (fixed or {}).items():
+        if element not in kinds:
+            raise ConfigError("fixed feature of an element not in the topology",
+                              source=topology.source, element=element)
+        pinned[element, Feature(feature)] = float(value)
+    pinned = dict(sorted(pinned.items(), key=lambda kv: (kv[0][0], kv[0][1].value)))
     params, index = [], {}
     for element, kind in model.elements():
         for feature, values in profile.domain(kind).items():
-            index[element, feature] = len(params)
-            params.append(Parameter(element, kind, feature, values))
+            if (element, feature) not in pinned:
+                index[element, feature] = len(params)
+                params.append(Parameter(element, kind, feature, values))
     forbidden = []
     for rule in (*profile.forbid, *extra):
         for elements in _matches(topology, model.elements(), rule):
             cells: dict[int, set[int]] = {}
+            applies = True
             for element, cond in zip(elements, rule.elements):
                 for feature, chosen in cond.values:
+                    if (element, feature) in pinned:
+                        applies = applies and pinned[element, feature] in chosen
+                        continue
                     p = index[element, feature]
                     cells[p] = {i for i, v in enumerate(params[p].values) if v in chosen}
+            if not applies or not all(cells.values()):
+                continue  # can never hold: a fixed or a domain value outside the combination
+            if not cells:
+                raise ConfigError(f"fixed values of {', '.join(elements)} are a forbidden combination",
+                                  source=topology.source, element=", ".join(elements))
             forbidden.append(Forbidden.of(cells))
-    return FeatureModel(topology, profile, tuple(params), tuple(dict.fromkeys(forbidden)))
+    return FeatureModel(topology, profile, tuple(params), tuple(dict.fromkeys(forbidden)),
+                        tuple((e, f, v) for (e, f), v in pinned.items()))
 
 
 def _matches(topology: Topology, elements: list[tuple[str, Kind]], rule: ForbidRule):

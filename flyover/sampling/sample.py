@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, Mapping
 
 import pyarrow as pa
 
@@ -58,7 +58,8 @@ class Sampling:
         return self.array.coverage
 
     def feature_rows(self) -> list[dict]:
-        """Rows of ``features/{class_id}.parquet``: one per sample × road/ramp."""
+        """Rows of ``features/{class_id}.parquet``: one per sample × road/ramp (fixed
+        features hold their value in every row)."""
         columns: dict[tuple[str, Feature], int] = {
             (p.element, p.feature): i for i, p in enumerate(self.model.parameters)}
         rows = []
@@ -68,8 +69,9 @@ class Sampling:
                        "kind": kind.value, "lanes": None, "radius_m": None, "slope_pct": None}
                 for feature in Feature:
                     i = columns.get((element, feature))
-                    if i is not None:
-                        value = self.model.parameters[i].values[values[i]]
+                    value = (self.model.parameters[i].values[values[i]] if i is not None
+                             else self.model.value(element, feature))
+                    if value is not None:
                         row[feature.value] = int(value) if feature is Feature.LANES else float(value)
                 rows.append(row)
         return rows
@@ -84,6 +86,7 @@ class Sampling:
 
 def sample_topology(topology: Topology, profile: Profile, *, t: int = 2, seed: int = 0,
                     class_id: str | None = None, extra: Iterable[ForbidRule] = (),
+                    fixed: Mapping[tuple[str, Feature], float] | None = None,
                     budget: SearchBudget = SearchBudget()) -> Sampling:
     """The smallest covering array this module finds for ``topology``'s features.
 
@@ -101,11 +104,14 @@ def sample_topology(topology: Topology, profile: Profile, *, t: int = 2, seed: i
         Defaults to the topology's canonical class id.
     extra
         Further forbidden combinations (e.g. from the geometry stage).
+    fixed
+        ``(element, feature) → value`` held constant, not covered (e.g.
+        :func:`flyover.geometry.feasibility.fixed_features`: slope 0 on level ramps).
     budget
         Search effort.
     """
     cid = class_id or topology_class_id(topology)
-    model = feature_model(topology, profile, extra)
+    model = feature_model(topology, profile, extra, fixed)
     array = covering_array(model.levels, t, forbidden=model.forbidden,
                            seed=sampling_seed(seed, cid), budget=budget)
     return Sampling(cid, model, array)
