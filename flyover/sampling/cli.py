@@ -18,8 +18,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "sample", help="covering array of one topology: rows and coverage",
         description="Build the t-way covering array of a topology's features and print its "
-                    "size and coverage. TOPOLOGY is a topology file (GraphML, YAML spec, .osm), "
-                    "a class id (read from results/classes/) or a catalog design name.")
+                    "size and coverage. Features the geometry stage fixes up front (slope 0 on "
+                    "level ramps, see flyover.geometry.feasibility) are written, not sampled. "
+                    "TOPOLOGY is a topology file (GraphML, YAML spec, .osm), a class id (read from "
+                    "results/classes/) or a catalog design name.")
     p.add_argument("topology", metavar="CLASS_OR_TOPOLOGY_FILE")
     p.add_argument("--t", type=int, default=None, help="strength (default: config sampling.t)")
     p.add_argument("--profile", default=None, help="regulation profile (default: config sampling.profile)")
@@ -57,6 +59,7 @@ def _topologies(arg: str):
 def _sample(args) -> int:
     from flyover.config import load_config
     from flyover.errors import InputFormatError
+    from flyover.geometry.feasibility import fixed_features
     from flyover.sampling.sample import FEATURES_SCHEMA, sample_topology
     from flyover.sampling.settings import settings_from_config
     from flyover.topology.tables import write_parquet
@@ -73,18 +76,22 @@ def _sample(args) -> int:
     for topology in topologies:
         start = time.perf_counter()
         s = sample_topology(topology, settings.profile, t=settings.t, seed=seed,
-                            budget=settings.budget)
+                            fixed=fixed_features(topology), budget=settings.budget)
         seconds = time.perf_counter() - start
         if args.features:
             write_parquet(s.feature_rows(), FEATURES_SCHEMA, args.features)
         c = s.coverage
         out.append({"interchange": topology.name, **s.coverage_row(), "profile": settings.profile.name,
                     "n_roads": topology.n_roads, "n_ramps": topology.n_ramps,
+                    "fixed": {f"{e}.{f.value}": v for e, f, v in s.model.fixed},
                     "construction": s.array.construction, "seconds": round(seconds, 3)})
         if not args.json:
             share = 100.0 * c.tuples_covered / c.tuples_total if c.tuples_total else 100.0
             print(f"{topology.name} ({s.class_id}): {topology.n_roads} roads, {topology.n_ramps} ramps, "
                   f"{c.n_params} parameters, t={c.t}, profile {settings.profile.name}")
+            if s.model.fixed:
+                print("  fixed (not sampled): " + ", ".join(
+                    f"{e} {f.value}={v:g}" for e, f, v in s.model.fixed))
             print(f"  {c.rows} rows (lower bound {c.lower_bound}), {c.tuples_covered}/{c.tuples_total} "
                   f"tuples covered ({share:.1f} %), {seconds:.2f} s")
     if args.json:

@@ -2,7 +2,8 @@
 # over its roads' and ramps' features (flyover/sampling).
 
 # Bump when the algorithm changes: params are rerun triggers.
-SAMPLING_VERSION = 1
+# 2: slope fixed at 0 on level ramps (flyover.geometry.feasibility), not sampled.
+SAMPLING_VERSION = 2
 
 
 rule sample_class:
