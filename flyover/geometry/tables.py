@@ -19,6 +19,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from flyover.errors import InputFormatError
+from flyover.geometry.feasibility import LEVEL_SLOPE_PCT
 from flyover.geometry.layout import Interchange, LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
@@ -79,16 +80,26 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int):
     """Algorithm 1's resampling: new targets drawn from the class's feature domain.
 
     The domain is the set of radius and slope values that occur for ramps in
-    the class's feature sets (i.e. the configured domain as sampled).
+    the class's feature sets (i.e. the configured domain as sampled). A ramp
+    whose slope is 0 in every feature set is a level ramp (slope fixed by
+    sampling, :mod:`flyover.geometry.feasibility`): it keeps slope 0, and its
+    0 is no slope to draw for other ramps.
     """
-    radii = sorted({f.radius_m for _, ramps in feature_sets.values() for f in ramps.values()})
-    slopes = sorted({f.slope_pct for _, ramps in feature_sets.values() for f in ramps.values()})
+    sets = [ramps for _, ramps in feature_sets.values()]
+    names = {r for ramps in sets for r in ramps}
+    level = {r for r in names if all(ramps[r].slope_pct == LEVEL_SLOPE_PCT
+                                     for ramps in sets if r in ramps)}
+    radii = sorted({f.radius_m for ramps in sets for f in ramps.values()})
+    slopes = sorted({f.slope_pct for ramps in sets for r, f in ramps.items() if r not in level})
 
     def draw(ramp: str, attempt: int) -> RampFeatures | None:
-        if not radii or not slopes:
+        if not radii or not (slopes or ramp in level):
             return None
         rng = np.random.default_rng([seed, zlib.crc32(ramp.encode()), attempt])
-        return RampFeatures(float(rng.choice(radii)), float(rng.choice(slopes)))
+        radius = float(rng.choice(radii))
+        if ramp in level:
+            return RampFeatures(radius, LEVEL_SLOPE_PCT)
+        return RampFeatures(radius, float(rng.choice(slopes)))
 
     return draw
 
