@@ -37,12 +37,20 @@ from flyover.topology.catalog import catalog_topologies  # noqa: E402
 
 
 def drawn_feature_sets(topology, profile, n, seed):
+    """``n`` feature sets drawn from the domains; features geometry fixes up front
+    (slope 0 on level ramps, :func:`flyover.geometry.feasibility.fixed_features`) are
+    set, not drawn (the same draws as without them, so other designs are unchanged)."""
+    from flyover.geometry.feasibility import fixed_features
+    from flyover.sampling.model import Feature
+
+    fixed = fixed_features(topology)
     rng = np.random.default_rng(seed)
     out = {}
     for k in range(n):
         lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
         ramps = {r: RampFeatures(float(rng.choice(profile["ramp"]["radius_m"])),
-                                 float(rng.choice(profile["ramp"]["slope_pct"])))
+                                 float(fixed.get((r, Feature.SLOPE_PCT),
+                                                 rng.choice(profile["ramp"]["slope_pct"]))))
                  for r in topology.ramps}
         out[k] = (lanes, ramps)
     return out
