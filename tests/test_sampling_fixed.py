@@ -1,0 +1,165 @@
+"""Fixed features: what geometry knows up front (slope 0 on level ramps) is written, not sampled.
+
+Coverage is checked by the sampling tests' independent brute-force checker.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from flyover.cli import main
+from flyover.errors import ConfigError
+from flyover.geometry.feasibility import fixed_features, level_ramps
+from flyover.geometry.layout import LayoutSettings, RampFeatures
+from flyover.geometry.tables import build_sample, domain_resampler
+from flyover.sampling.model import ElementCondition, Feature, ForbidRule, default_profile, feature_model
+from flyover.sampling.sample import FEATURES_SCHEMA, sample_topology
+from flyover.topology.catalog import catalog_topologies
+from flyover.topology.model import Connection, Kind, Label, Ramp, Road, Topology
+from tests.test_sampling import cells, independent_coverage
+
+CD_ROADS = {"cA1", "cA2", "cB1", "cB2"}
+
+
+@pytest.fixture(scope="module")
+def cloverleaf_cd():
+    return catalog_topologies()["cloverleaf_cd"]
+
+
+@pytest.fixture(scope="module")
+def cd_sampling(cloverleaf_cd):
+    return sample_topology(cloverleaf_cd, default_profile(), t=2, seed=11,
+                           fixed=fixed_features(cloverleaf_cd))
+
+
+def _bytes(sampling) -> bytes:
+    buf = io.BytesIO()
+    pq.write_table(pa.Table.from_pylist(sampling.feature_rows(), schema=FEATURES_SCHEMA), buf)
+    return buf.getvalue()
+
+
+# -- which ramps are level ----------------------------------------------------------------
+
+
+def test_level_ramps_are_the_collector_distributor_roads_of_cloverleaf_cd(cloverleaf_cd):
+    assert level_ramps(cloverleaf_cd) == CD_ROADS
+    assert fixed_features(cloverleaf_cd) == {(r, Feature.SLOPE_PCT): 0.0 for r in CD_ROADS}
+
+
+def test_ramps_between_different_roads_or_from_a_ramp_are_not_level():
+    # r1 leaves and rejoins A1 (level); r2 leaves r1 and rejoins A1 (not both on one road);
+    # r3 goes A1 -> B1 (different roads)
+    t = Topology.build("x", roads=[Road("A1", "A"), Road("A2", "A"), Road("B1", "B"), Road("B2", "B")],
+                       ramps=[Ramp("r1"), Ramp("r2"), Ramp("r3")],
+                       connections=[Connection("A1", "r1", Label.OUT_R), Connection("r1", "A1", Label.IN_R),
+                                    Connection("r1", "r2", Label.OUT_R), Connection("r2", "A1", Label.IN_R),
+                                    Connection("A1", "r3", Label.OUT_R), Connection("r3", "B1", Label.IN_R)])
+    assert level_ramps(t) == {"r1"}
+    assert level_ramps(catalog_topologies()["j1"]) == frozenset()
+
+
+# -- sampling with fixed features ------------------------------------------------------------
+
+
+def test_cloverleaf_cd_rows_have_slope_0_on_exactly_the_cd_roads(cd_sampling, cloverleaf_cd):
+    rows = cd_sampling.feature_rows()
+    assert len(rows) == cd_sampling.coverage.rows * (cloverleaf_cd.n_roads + cloverleaf_cd.n_ramps)
+    ramps = [r for r in rows if r["kind"] == "ramp"]
+    assert {r["element"] for r in ramps if r["slope_pct"] == 0.0} == CD_ROADS
+    assert all(r["slope_pct"] == 0.0 for r in ramps if r["element"] in CD_ROADS)
+    assert all(r["slope_pct"] in (1, 2, 3, 4, 5) for r in ramps if r["element"] not in CD_ROADS)
+    # their radius is still sampled, over its whole domain
+    assert {r["radius_m"] for r in ramps if r["element"] == "cA1"} == set(
+        default_profile().domain(Kind.RAMP)[Feature.RADIUS_M])
+
+
+def test_fixed_features_are_no_parameters_and_the_rest_is_fully_covered(cd_sampling, cloverleaf_cd):
+    model = cd_sampling.model
+    unfixed = feature_model(cloverleaf_cd, default_profile())
+    assert len(model.parameters) == len(unfixed.parameters) - len(CD_ROADS)
+    assert not any(p.element in CD_ROADS and p.feature is Feature.SLOPE_PCT for p in model.parameters)
+    covered, total = independent_coverage(cd_sampling.array.rows, model.levels, 2, cells(model.forbidden))
+    assert covered == total > 0
+    c = cd_sampling.coverage
+    assert (c.n_params, c.tuples_total, c.tuples_covered) == (len(model.parameters), total, covered)
+    assert c.rows >= c.lower_bound
+
+
+def test_a_design_without_level_ramps_samples_the_same_bytes():
+    j1 = catalog_topologies()["j1"]
+    assert fixed_features(j1) == {}
+    plain = sample_topology(j1, default_profile(), t=2, seed=5)
+    fixed = sample_topology(j1, default_profile(), t=2, seed=5, fixed=fixed_features(j1))
+    assert fixed.model.fixed == ()
+    assert _bytes(fixed) == _bytes(plain)
+
+
+def test_a_rule_on_a_fixed_feature_applies_only_where_the_fixed_value_matches(cloverleaf_cd):
+    fixed = fixed_features(cloverleaf_cd)
+
+    def rule(slope):
+        return ForbidRule((ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, frozenset({30.0})),
+                                                        (Feature.SLOPE_PCT, frozenset({slope})))),),)
+
+    model = feature_model(cloverleaf_cd, default_profile(), extra=[rule(0.0)], fixed=fixed)
+    constrained = [model.parameters[f.params[0]] for f in model.forbidden]
+    assert sorted(p.element for p in constrained) == sorted(CD_ROADS)  # 0 matches only there
+    assert all(p.feature is Feature.RADIUS_M and len(f.params) == 1
+               for p, f in zip(constrained, model.forbidden))
+    s = sample_topology(cloverleaf_cd, default_profile(), seed=2, extra=[rule(0.0)], fixed=fixed)
+    assert not any(r["element"] in CD_ROADS and r["radius_m"] == 30 for r in s.feature_rows())
+    # a slope-5 rule never holds on a ramp fixed at 0: it constrains only the others
+    model5 = feature_model(cloverleaf_cd, default_profile(), extra=[rule(5.0)], fixed=fixed)
+    assert {model5.parameters[f.params[0]].element for f in model5.forbidden} == \
+        set(cloverleaf_cd.ramps) - CD_ROADS
+
+
+def test_bad_fixed_features_are_config_errors_naming_the_element(cloverleaf_cd):
+    with pytest.raises(ConfigError) as err:
+        feature_model(cloverleaf_cd, default_profile(), fixed={("zz", Feature.SLOPE_PCT): 0.0})
+    assert err.value.element == "zz"
+    only_fixed = ForbidRule((ElementCondition(Kind.RAMP, ((Feature.SLOPE_PCT, frozenset({0.0})),),
+                                              "cA1"),))
+    with pytest.raises(ConfigError, match="forbidden combination") as err:
+        feature_model(cloverleaf_cd, default_profile(), extra=[only_fixed],
+                      fixed=fixed_features(cloverleaf_cd))
+    assert err.value.element == "cA1"
+
+
+def test_cli_sample_reports_the_fixed_slopes(capsys):
+    assert main(["sample", "cloverleaf_cd", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["fixed"] == {f"{r}.slope_pct": 0.0 for r in sorted(CD_ROADS)}
+    assert out["tuples_covered"] == out["tuples_total"]
+
+
+# -- geometry meets the fixed slope --------------------------------------------------------
+
+
+def test_resampling_keeps_a_level_ramp_level_and_never_draws_0_for_others():
+    sets = {0: ({}, {"c": RampFeatures(100.0, 0.0), "r": RampFeatures(60.0, 3.0)}),
+            1: ({}, {"c": RampFeatures(30.0, 0.0), "r": RampFeatures(40.0, 5.0)})}
+    draw = domain_resampler(sets, seed=1)
+    assert all(draw("c", k).slope_pct == 0.0 for k in range(1, 20))
+    assert {draw("r", k).slope_pct for k in range(1, 40)} == {3.0, 5.0}
+
+
+@pytest.mark.slow
+def test_a_cloverleaf_cd_feature_set_builds_its_cd_roads_level_and_ok(cd_sampling, cloverleaf_cd):
+    from flyover.geometry.tables import read_feature_sets
+
+    buf = io.BytesIO(_bytes(cd_sampling))
+    sets = read_feature_sets(buf)
+    ic = build_sample(cloverleaf_cd, sets[0], class_id=cd_sampling.class_id, sample=0, seed=1,
+                      settings=LayoutSettings())
+    cd = {o.ramp: o for o in ic.outcomes if o.ramp in CD_ROADS}
+    assert set(cd) == CD_ROADS
+    for o in cd.values():
+        assert o.fit.spec.target_slope_pct == 0.0
+        assert o.fit.max_slope_pct == pytest.approx(0.0, abs=1e-9)
+        assert o.fit.ok and o.first_try_ok and o.infeasible == ""
