@@ -17,9 +17,14 @@ Objective (whole population at once, numpy): curvature variance + radius
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
 and already fitted ramps, and curvature jumps at joints (G2 preferred).
-The search stops as soon as the best candidate meets the targets on fine
+The search (:func:`evolve`) is adaptive differential evolution (JADE:
+current-to-pbest/1/bin with an archive, ``F`` and ``CR`` adapted from the
+successful trials), one objective call per generation for the whole
+population. It stops as soon as the best candidate meets the targets on fine
 samples (after ``min_generations``), or after ``patience`` generations
-without a 1 % improvement (it will not meet them).
+without a 1 % improvement (it will not meet them). ``engine: scipy`` runs
+scipy's ``differential_evolution`` on the same objective instead (the
+benchmark's reference).
 
 Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
 of the reference line). A target of ``inf`` on a ramp that has to turn means
@@ -164,10 +169,11 @@ class FitSettings:
     inf_reference_m: float = 250.0
     compact_m: float = 500.0
     compact_weight: float = 0.02
-    patience: int = 60
+    patience: int = 30
     conflict_weight: float = 2.0
     samples: int = 24
     vectorized: bool = True
+    engine: str = "jade"
 
 
 @dataclass(frozen=True)
@@ -408,6 +414,94 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     return f, terms
 
 
+
+# -- the search -----------------------------------------------------------------
+
+@dataclass
+class _Search:
+    """Outcome of :func:`evolve`: best decision vector, its energy, effort."""
+
+    x: np.ndarray
+    fun: float
+    evaluations: int
+    generations: int
+
+
+def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, seed: int,
+           stop=None, init: np.ndarray | None = None) -> _Search:
+    """Adaptive differential evolution (JADE: current-to-pbest/1/bin with an archive).
+
+    ``f`` maps a population ``(D, P)`` to energies ``(P,)`` in one call. ``F``
+    and ``CR`` adapt per generation from the successful trials (Zhang &
+    Sanderson, IEEE TEC 13(5), 2009); a trial leaving the bounds is put halfway
+    between its parent and the bound. ``init`` rows (decision vectors) replace
+    the first rows of the Latin-hypercube start. ``stop(x_best, f_best, gen)``
+    ends the search when it returns True. Deterministic for a seed.
+    """
+    rng = np.random.default_rng(seed)
+    lo = np.array([b[0] for b in bounds_], float)
+    hi = np.array([b[1] for b in bounds_], float)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    d = len(lo)
+    n = max(5, popsize * d)
+    # Latin hypercube in the unit cube
+    u = (rng.permuted(np.tile(np.arange(n), (d, 1)), axis=1).T + rng.random((n, d))) / n
+    if init is not None and len(init):
+        k = min(len(init), n // 2)
+        u[:k] = np.clip((np.asarray(init, float)[:k] - lo) / span, 0.0, 1.0)
+    pop = lo + u * span
+    energy = np.asarray(f(pop.T), float)
+    evals = n
+    archive = np.empty((0, d))
+    mu_cr, mu_f, c = 0.5, 0.5, 0.1
+    n_best = max(2, int(round(0.1 * n)))
+    gen = 0
+    ib = int(np.argmin(energy))
+    while gen < maxiter:
+        gen += 1
+        cr = np.clip(rng.normal(mu_cr, 0.1, n), 0.0, 1.0)
+        fm = mu_f + 0.1 * np.tan(np.pi * (rng.random(n) - 0.5))
+        while np.any(fm <= 0):
+            bad = fm <= 0
+            fm[bad] = mu_f + 0.1 * np.tan(np.pi * (rng.random(int(bad.sum())) - 0.5))
+        fm = np.minimum(fm, 1.0)
+        order = np.argsort(energy, kind="stable")
+        pbest = pop[order[rng.integers(0, n_best, n)]]
+        idx = np.arange(n)
+        r1 = (idx + rng.integers(1, n, n)) % n
+        union = np.vstack([pop, archive]) if len(archive) else pop
+        r2 = rng.integers(0, len(union), n)
+        for _ in range(8):  # r2 differs from i and r1 (redraw the few that clash)
+            clash = (r2 == idx) | (r2 == r1)
+            if not clash.any():
+                break
+            r2[clash] = rng.integers(0, len(union), int(clash.sum()))
+        v = pop + fm[:, None] * (pbest - pop) + fm[:, None] * (pop[r1] - union[r2])
+        v = np.where(v < lo, (pop + lo) / 2, v)
+        v = np.where(v > hi, (pop + hi) / 2, v)
+        cross = rng.random((n, d)) < cr[:, None]
+        cross[idx, rng.integers(0, d, n)] = True
+        trial = np.where(cross, v, pop)
+        e_trial = np.asarray(f(trial.T), float)
+        evals += n
+        win = e_trial <= energy
+        better = e_trial < energy
+        if better.any():
+            archive = np.vstack([archive, pop[better]])
+            if len(archive) > n:
+                archive = archive[rng.permutation(len(archive))[:n]]
+            gain = energy[better] - e_trial[better]
+            w = gain / gain.sum() if gain.sum() > 0 else np.full(len(gain), 1 / len(gain))
+            mu_cr = (1 - c) * mu_cr + c * float((w * cr[better]).sum())
+            fs = fm[better]
+            mu_f = (1 - c) * mu_f + c * float((w * fs**2).sum() / max((w * fs).sum(), 1e-12))
+        pop[win], energy[win] = trial[win], e_trial[win]
+        ib = int(np.argmin(energy))
+        if stop is not None and stop(pop[ib], float(energy[ib]), gen):
+            break
+    return _Search(pop[ib].copy(), float(energy[ib]), evals, gen)
+
+
 def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
              settings: FitSettings | None = None, seed: int = 0) -> RampFit:
     """Fit one ramp by differential evolution and measure the result.
@@ -458,27 +552,32 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
 
-    def stop(intermediate_result) -> bool:
-        gen[0] += 1
-        fun = float(intermediate_result.fun)
+    def stop(x: np.ndarray, fun: float, generation: int) -> bool:
+        gen[0] = generation
         if fun < best[0] - 0.01 * abs(best[0]) or not np.isfinite(best[0]):
-            best[0], best[1] = fun, gen[0]
-        elif settings.patience and gen[0] - best[1] >= settings.patience:
+            best[0], best[1] = fun, generation
+        elif settings.patience and generation - best[1] >= settings.patience:
             return True  # stagnated: more generations will not meet the targets
-        return gen[0] >= settings.min_generations and good(intermediate_result.x)
+        return generation >= settings.min_generations and good(x)
+
+    def scipy_stop(intermediate_result) -> bool:  # scipy passes the result by this name
+        return stop(intermediate_result.x, float(intermediate_result.fun), gen[0] + 1)
 
     t0 = time.perf_counter()
-    if settings.vectorized:
-        res = differential_evolution(counted, b, popsize=settings.popsize, maxiter=settings.maxiter,
-                                     seed=seed, tol=1e-8, polish=False, vectorized=True,
-                                     updating="deferred", callback=stop, init="sobol")
+    if settings.engine == "jade":
+        x_best = evolve(counted, b, settings.popsize, settings.maxiter, seed, stop).x
+    elif settings.vectorized:
+        x_best = differential_evolution(
+            counted, b, popsize=settings.popsize, maxiter=settings.maxiter, seed=seed, tol=1e-8,
+            polish=False, vectorized=True, updating="deferred", init="sobol",
+            callback=scipy_stop).x
     else:
-        res = differential_evolution(lambda x: float(counted(x[:, None])[0]), b,
-                                     popsize=settings.popsize, maxiter=settings.maxiter,
-                                     seed=seed, tol=1e-8, polish=False, callback=stop,
-                                     init="sobol")
+        x_best = differential_evolution(
+            lambda x: float(counted(x[:, None])[0]), b, popsize=settings.popsize,
+            maxiter=settings.maxiter, seed=seed, tol=1e-8, polish=False, init="sobol",
+            callback=scipy_stop).x
     seconds = time.perf_counter() - t0
-    return measure(spec, res.x, obstacles, settings, count[0], seconds)
+    return measure(spec, x_best, obstacles, settings, count[0], seconds)
 
 
 def measure(spec: RampSpec, x: np.ndarray, obstacles: Obstacles, settings: FitSettings,
