@@ -7,38 +7,50 @@ environment's ``python``). :func:`setup_qc_venv` creates it idempotently:
 
     python -m flyover.opendrive.qc --setup        # creates ./.venv-qc if missing
 
-:func:`run_asam_checker` writes the checker's configuration XML, runs
-``python -m qc_opendrive -c config.xml`` and parses its result file (an
-``.xqar`` XML: ``CheckerResults/CheckerBundle/Checker[@status]/Issue``).
-The checker bundles the ASAM XSDs of every OpenDRIVE version
-(:func:`schema_dir`), which :mod:`flyover.opendrive.validate` uses for the
-schema check.
+:func:`run_qc_batch` writes the checker's own configuration XML per file and
+runs them all in *one* process of that environment (``_qc_driver.py``, run by
+path: it calls the bundle's own ``run_checks`` per file, as ``python -m
+qc_opendrive -c config.xml`` does, so startup is paid once), then parses each
+result file (an ``.xqar`` XML:
+``CheckerResults/CheckerBundle/Checker[@status]/Issue``). The same process
+also runs XSD 1.1 validations (OpenDRIVE 1.8) for :mod:`flyover.opendrive.validate`.
+The checker bundles the ASAM XSDs of every OpenDRIVE version (:func:`schema_dir`).
+
+No one file gets every checker of the bundle (1.0.0) completed: one applies up
+to OpenDRIVE 1.7 only, another from 1.8 on. :func:`bundle_verdict` therefore
+judges the union of runs on renditions of one interchange in several versions.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import subprocess
 import sys
 import tempfile
+import time
 import venv
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Sequence
 from xml.sax.saxutils import quoteattr
 
 from lxml import etree
 
 from flyover.errors import FlyoverError
 
-__all__ = ["QCError", "CheckerIssue", "CheckerOutcome", "find_qc_python", "setup_qc_venv",
-           "schema_dir", "run_asam_checker", "QC_PACKAGE"]
+__all__ = ["QCError", "CheckerIssue", "CheckerOutcome", "CheckerRun", "XsdRun", "QCBatch", "Rendition",
+           "find_qc_python", "setup_qc_venv", "schema_dir", "checker_config", "parse_result",
+           "run_qc_batch", "run_asam_checker",
+           "bundle_verdict", "QC_PACKAGE"]
 
 log = logging.getLogger(__name__)
 
 #: the requirement installed into the checker's environment
 QC_PACKAGE = "asam-qc-opendrive>=1.0,<2"
 _REPO_ROOT = Path(__file__).resolve().parents[2]
+_DRIVER = Path(__file__).with_name("_qc_driver.py")
 _LEVELS = {"1": "error", "2": "warning", "3": "information"}
 
 
@@ -110,10 +122,14 @@ def setup_qc_venv(path: str | os.PathLike | None = None) -> Path:
 
 
 def schema_dir(python: Path | None = None) -> Path:
-    """The folder of ASAM OpenDRIVE XSDs bundled with the checker (``1.7.0/...``)."""
+    """The folder of ASAM OpenDRIVE XSDs bundled with the checker (``1.7.0/...``).
+
+    Located without importing the checker (whose import takes about a second).
+    """
     py = python or find_qc_python()
     res = subprocess.run(
-        [str(py), "-c", "import os, qc_opendrive.schema as s; print(os.path.dirname(s.__file__))"],
+        [str(py), "-c", "import importlib.util, os; s = importlib.util.find_spec('qc_opendrive'); "
+                        "print(os.path.join(s.submodule_search_locations[0], 'schema'))"],
         capture_output=True, text=True)
     if res.returncode != 0:
         raise QCError(f"cannot locate the checker's schemas: {res.stderr.strip()[-300:]}",
@@ -121,7 +137,8 @@ def schema_dir(python: Path | None = None) -> Path:
     return Path(res.stdout.strip())
 
 
-def _config_xml(xodr: Path, result: Path) -> str:
+def checker_config(xodr: Path, result: Path) -> str:
+    """The checker's own configuration XML: check ``xodr``, write the result file ``result``."""
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n<Config>\n'
             f'  <Param name="InputFile" value={quoteattr(str(xodr))}/>\n'
             f'  <CheckerBundle application="xodrBundle">\n'
@@ -147,24 +164,166 @@ def parse_result(path: str | os.PathLike) -> list[CheckerOutcome]:
     return out
 
 
+@dataclass(frozen=True)
+class CheckerRun:
+    """The checker bundle's run on one file: its outcomes, or ``error`` when it did not run."""
+
+    xodr: str
+    outcomes: tuple[CheckerOutcome, ...]
+    error: str
+    seconds: float
+
+
+@dataclass(frozen=True)
+class XsdRun:
+    """One file validated against an XSD 1.1 schema: ``errors`` (``line N: reason``) or ``error``."""
+
+    xodr: str
+    errors: tuple[str, ...]
+    error: str
+    seconds: float
+
+
+@dataclass(frozen=True)
+class QCBatch:
+    """Everything one process of the checker's environment did, in input order."""
+
+    checker: tuple[CheckerRun, ...]
+    xsd11: tuple[XsdRun, ...]
+    seconds: float
+    startup_seconds: float
+
+
+def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
+                 xsd11: Sequence[tuple[str | os.PathLike, str | os.PathLike]] = (),
+                 python: Path | None = None, timeout_s: float = 300) -> QCBatch:
+    """Run the checker bundle on every file of ``xodrs`` and the ``(schema, file)`` XSD 1.1
+    validations of ``xsd11``, all in one process of the checker's environment.
+
+    A file the bundle cannot process gets a :class:`CheckerRun` with ``error``
+    set; the others still run. ``timeout_s`` is per file. Raises
+    :class:`QCError` when the process itself cannot run.
+    """
+    py = python or find_qc_python()
+    paths = [Path(x).resolve() for x in xodrs]
+    with tempfile.TemporaryDirectory(prefix="flyover-qc-") as tmp:
+        cfgs, results = [], []
+        for i, x in enumerate(paths):
+            cfg, res = Path(tmp) / f"{i}.config.xml", Path(tmp) / f"{i}.xqar"
+            cfg.write_text(checker_config(x, res), encoding="utf-8")
+            cfgs.append(str(cfg))
+            results.append(res)
+        jobs = Path(tmp) / "jobs.json"
+        jobs.write_text(json.dumps({"configs": cfgs, "xsd11": [[str(Path(s).resolve()), str(Path(x).resolve())]
+                                                                for s, x in xsd11]}), encoding="utf-8")
+        t0 = time.perf_counter()
+        try:
+            proc = subprocess.run([str(py), str(_DRIVER), str(jobs)], cwd=tmp, capture_output=True,
+                                  text=True, timeout=timeout_s * max(1, len(paths) + len(xsd11)))
+            report = json.loads(proc.stdout.strip().splitlines()[-1]) if proc.returncode == 0 else None
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise QCError(f"ASAM checker failed to run: {exc}",
+                          source=", ".join(map(str, paths)) or None) from None
+        except (ValueError, IndexError):
+            report = None
+        if report is None:
+            raise QCError(f"ASAM checker failed (exit {proc.returncode}): {proc.stderr.strip()[-400:]}",
+                          source=", ".join(map(str, paths)) or None)
+        runs = []
+        for x, res, rep in zip(paths, results, report["configs"]):
+            error = rep["error"] or ("" if res.exists() else "no result file")
+            runs.append(CheckerRun(str(x), tuple(parse_result(res)) if not error else (),
+                                   f"ASAM checker failed on {x}: {error}" if error else "",
+                                   float(rep["seconds"])))
+        xsds = tuple(XsdRun(str(x), tuple(rep["errors"]), rep["error"] or "", float(rep["seconds"]))
+                     for (_, x), rep in zip(xsd11, report["xsd11"]))
+        return QCBatch(tuple(runs), xsds, time.perf_counter() - t0, float(report["startup_seconds"]))
+
+
 def run_asam_checker(xodr: str | os.PathLike, *, python: Path | None = None,
-                     timeout_s: float = 600) -> list[CheckerOutcome]:
+                     timeout_s: float = 300) -> list[CheckerOutcome]:
     """Run the ASAM OpenDRIVE checker bundle on ``xodr``.
 
     Returns every checker's status (``completed``, ``skipped``, ``error``)
     and issues. Raises :class:`QCError` if the tool cannot run.
     """
-    py = python or find_qc_python()
-    xodr = Path(xodr).resolve()
-    with tempfile.TemporaryDirectory(prefix="flyover-qc-") as tmp:
-        cfg, res = Path(tmp) / "config.xml", Path(tmp) / "result.xqar"
-        cfg.write_text(_config_xml(xodr, res), encoding="utf-8")
-        proc = subprocess.run([str(py), "-m", "qc_opendrive", "-c", str(cfg)], cwd=tmp,
-                              capture_output=True, text=True, timeout=timeout_s)
-        if proc.returncode != 0 or not res.exists():
-            raise QCError(f"ASAM checker failed (exit {proc.returncode}): "
-                          f"{proc.stderr.strip()[-400:]}", source=str(xodr))
-        return parse_result(res)
+    run = run_qc_batch([xodr], python=python, timeout_s=timeout_s).checker[0]
+    if run.error:
+        raise QCError(run.error, source=str(xodr))
+    return list(run.outcomes)
+
+
+# -- one verdict over renditions in several versions ---------------------------------------
+
+@dataclass(frozen=True)
+class Rendition:
+    """The checker's outcomes on one rendition of an interchange.
+
+    Attributes
+    ----------
+    version
+        The OpenDRIVE version the rendition declares, e.g. ``"1.8"``.
+    origin
+        Where it came from, e.g. ``"the file"``, ``"written from geometry.json"``.
+    outcomes
+        The bundle's outcome per checker on it.
+    """
+
+    version: str
+    origin: str
+    outcomes: tuple[CheckerOutcome, ...]
+
+
+def _by_version(o: CheckerOutcome) -> bool:
+    return o.status == "skipped" and o.summary.startswith("Version")
+
+
+def bundle_verdict(renditions: Sequence[Rendition], missing: Sequence[str] = ()) -> tuple[bool, str]:
+    """Judge the checker bundle over renditions of one interchange.
+
+    Passes only when every checker of the bundle completed on at least one
+    rendition, no checker ended in error and no run reported an issue. A
+    checker that no rendition completed fails the verdict, also when it was
+    skipped only because it does not apply to the versions at hand (``missing``
+    says why no rendition in another version was checked).
+
+    Returns ``(ok, detail)``; the detail says which checkers ran on which
+    rendition.
+
+    Examples
+    --------
+    >>> a = CheckerOutcome("check_a", "completed", "", ())
+    >>> b = CheckerOutcome("check_b", "skipped", "Version 1.8.0 is not valid ...", ())
+    >>> ok, detail = bundle_verdict([Rendition("1.8", "the file", (a, b))], ["no 1.7 rendition"])
+    >>> ok
+    False
+    >>> detail.split("; ")[:2]
+    ['1/2 checkers completed, 0 issues', 'not completed on any rendition: check_b']
+    """
+    order: dict[str, None] = {}
+    for r in renditions:
+        order.update((o.checker_id, None) for o in r.outcomes)
+    done = {o.checker_id for r in renditions for o in r.outcomes if o.status == "completed"}
+    issues = [(r.version, i) for r in renditions for o in r.outcomes for i in o.issues]
+    errored = [(r.version, o) for r in renditions for o in r.outcomes if o.status == "error"]
+    never = [c for c in order if c not in done]
+    parts = [f"{len(done)}/{len(order)} checkers completed, {len(issues)} issues"]
+    if never:
+        parts.append("not completed on any rendition: " + ", ".join(never))
+    for r in renditions:
+        text = f"on {r.version} ({r.origin}): {sum(o.status == 'completed' for o in r.outcomes)} completed"
+        excluded = [o.checker_id for o in r.outcomes if _by_version(o)]
+        skipped = [o.checker_id for o in r.outcomes if o.status == "skipped" and not _by_version(o)]
+        if excluded:
+            text += f", not applicable to version {r.version}: " + ", ".join(excluded)
+        if skipped:
+            text += ", skipped on failed preconditions: " + ", ".join(skipped)
+        parts.append(text)
+    parts += list(missing)
+    parts += [f"error in {o.checker_id} on {v}: {o.summary}" for v, o in errored]
+    parts += [f"{i.checker_id} on {v}: {i.description} at {i.where[:160]}" for v, i in issues[:3]]
+    ok = bool(order) and not never and not issues and not errored
+    return ok, "; ".join(parts)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,112 @@
+"""Run the ASAM OpenDRIVE checker on several files in one process of its own environment.
+
+Not part of flyover's API: :mod:`flyover.opendrive.qc` runs this file *by path*
+with the checker environment's python (``.venv-qc``), which has
+``asam-qc-opendrive`` but not flyover, so this module imports only the
+standard library and the checker's own packages (inside :func:`main`)::
+
+    .venv-qc/bin/python _qc_driver.py JOBS.json
+
+``JOBS.json``::
+
+    {"configs": ["a/config.xml", ...],          # the checker's own config files
+     "xsd11": [["OpenDRIVE_Core.xsd", "b.xodr"], ...]}
+
+For every config this does what ``python -m qc_opendrive -c config.xml``
+does (:func:`qc_opendrive.main.main`): a fresh ``Configuration`` and
+``Result``, the bundle's ``run_checks``, the result file (``.xqar``) at the
+config's ``resultFile``. The checker's startup (imports, ~0.7 s) is paid once
+per process, and an XSD 1.1 schema (OpenDRIVE 1.8, built by ``xmlschema``,
+~0.5 s) once per schema file: the bundle's ``valid_schema`` checker gets a
+memoizing stand-in for ``xmlschema.XMLSchema11`` (same schema, same
+validation, built once). ``xsd11`` jobs validate a file against an XSD 1.1
+schema the same way (flyover's own ``xsd`` check of 1.8 files).
+
+Prints one JSON object on stdout: per config ``{"seconds", "error"}``, per
+xsd11 job ``{"seconds", "errors", "error"}`` (``errors``: ``"line N:
+reason"``), and ``startup_seconds``. A job that raises is reported with its
+error; the other jobs still run.
+"""
+
+import json
+import logging
+import sys
+import time
+
+
+class _MemoXmlschema:
+    """Stand-in for the ``xmlschema`` module: ``XMLSchema11`` built once per schema file."""
+
+    def __init__(self, module):
+        self._module = module
+        self._schemas = {}
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+    def XMLSchema11(self, source, *args, **kwargs):  # noqa: N802 - the module's own name
+        if args or kwargs or not isinstance(source, str):
+            return self._module.XMLSchema11(source, *args, **kwargs)
+        if source not in self._schemas:
+            self._schemas[source] = self._module.XMLSchema11(source)
+        return self._schemas[source]
+
+
+def _run_config(path, bundle):
+    from qc_baselib import Configuration, Result
+
+    main, constants = bundle
+    config = Configuration()
+    config.load_from_file(xml_file_path=path)
+    result = Result()
+    result.register_checker_bundle(name=constants.BUNDLE_NAME, description="OpenDrive checker bundle",
+                                   version=constants.BUNDLE_VERSION, summary="")
+    result.set_result_version(version=constants.BUNDLE_VERSION)
+    main.run_checks(config, result)
+    result.copy_param_from_config(config)
+    result.write_to_file(config.get_checker_bundle_param(checker_bundle_name=constants.BUNDLE_NAME,
+                                                         param_name="resultFile"),
+                         generate_summary=True)
+
+
+def _xsd11_errors(schema_path, xodr, memo):
+    from lxml import etree
+
+    schema = memo.XMLSchema11(schema_path)
+    return [f"line {e.sourceline}: {e.reason}" for e in schema.iter_errors(etree.parse(xodr))]
+
+
+def _timed(fn, *args):
+    t0 = time.perf_counter()
+    try:
+        value, error = fn(*args), None
+    except Exception as exc:  # noqa: BLE001 - reported per job; the other jobs still run
+        value, error = None, f"{type(exc).__name__}: {exc}"
+    return value, error, round(time.perf_counter() - t0, 4)
+
+
+def main(argv):
+    t0 = time.perf_counter()
+    with open(argv[1], encoding="utf-8") as fh:
+        jobs = json.load(fh)
+    import xmlschema
+    from qc_opendrive import constants
+    from qc_opendrive import main as qc_main
+    from qc_opendrive.checks.schema import valid_schema
+
+    logging.getLogger().setLevel(logging.WARNING)  # the bundle logs every check at INFO
+    memo = _MemoXmlschema(xmlschema)
+    valid_schema.xmlschema = memo
+    out = {"startup_seconds": round(time.perf_counter() - t0, 4), "configs": [], "xsd11": []}
+    for path in jobs.get("configs", []):
+        _, error, seconds = _timed(_run_config, path, (qc_main, constants))
+        out["configs"].append({"seconds": seconds, "error": error})
+    for schema_path, xodr in jobs.get("xsd11", []):
+        errors, error, seconds = _timed(_xsd11_errors, schema_path, xodr, memo)
+        out["xsd11"].append({"seconds": seconds, "errors": errors or [], "error": error})
+    sys.stdout.write(json.dumps(out) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
