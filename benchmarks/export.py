@@ -14,25 +14,49 @@ For every ``geometry.json``: the seconds to write the ``.xodr`` (writer only),
 the seconds of ``netconvert``, and every check of ``flyover validate`` (XSD,
 ASAM checker, 3D continuity, netconvert, routes). Prints one line per
 interchange, then the pass rate per check and the mean/max seconds.
+
+The ASAM checker runs on each interchange's file (1.8) and its 1.7 rendition
+(no one version completes every checker of the bundle). Its seconds per
+interchange are printed three ways: one process of the checker's own command
+(``python -m qc_opendrive -c config.xml``) per file, as flyover ran it
+before; one process per interchange (``flyover.opendrive.qc.run_qc_batch``,
+what ``flyover validate`` and the workflow do; with the XSD 1.1 check of the
+1.8 file in the same process); and one process for every interchange.
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from flyover.geometry.model import read_geometry
+from flyover.opendrive import qc
 from flyover.opendrive.validate import CHECKS, validate_xodr
-from flyover.opendrive.writer import xodr_bytes
+from flyover.opendrive.writer import ExportOptions, xodr_bytes
+
+
+def checker_per_file(paths: list[Path]) -> float:
+    """Seconds of the checker's own command, one process per file."""
+    py = qc.find_qc_python()
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        for p in paths:
+            cfg, res = Path(tmp) / "config.xml", Path(tmp) / "result.xqar"
+            cfg.write_text(qc.checker_config(p.resolve(), res), encoding="utf-8")
+            subprocess.run([str(py), "-m", "qc_opendrive", "-c", str(cfg)], cwd=tmp,
+                           capture_output=True, check=True)
+    return time.perf_counter() - t0
 
 
 def run(items, keep: Path | None) -> int:
     passed = {c: 0 for c in CHECKS}
     t_xodr, t_nc, n = [], [], 0
+    t_qc_before, t_qc_after, renditions = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for name, g in items:
             out = (keep or Path(tmp)) / f"{name.replace('/', '_')}.xodr"
@@ -47,6 +71,11 @@ def run(items, keep: Path | None) -> int:
             out.write_bytes(data)
             results, times, _ = validate_xodr(out, geometry=g)
             t_nc.append(times.get("netconvert", float("nan")))
+            r17 = Path(tmp) / f"{name.replace('/', '_')}.1.7.xodr"
+            r17.write_bytes(xodr_bytes(g, ExportOptions(opendrive_minor=7)))
+            renditions += [out, r17]
+            t_qc_after.append(times.get("asam_qc", float("nan")))
+            t_qc_before.append(checker_per_file([out, r17]))
             n += 1
             for r in results:
                 passed[r.check] += r.ok
@@ -61,6 +90,15 @@ def run(items, keep: Path | None) -> int:
               f"max {max(t_xodr):.3f}")
         print(f"  seconds per interchange, netconvert:    mean {statistics.mean(t_nc):.3f}, "
               f"max {max(t_nc):.3f}")
+    if t_qc_after:
+        batch = qc.run_qc_batch(renditions)
+        print("  seconds per interchange, ASAM checker on the file (1.8) and its 1.7 rendition:")
+        print(f"    one process per file (checker's own command): mean {statistics.mean(t_qc_before):.3f}, "
+              f"max {max(t_qc_before):.3f}")
+        print(f"    one process per interchange (+ XSD 1.1):      mean {statistics.mean(t_qc_after):.3f}, "
+              f"max {max(t_qc_after):.3f}")
+        print(f"    one process for all {len(t_qc_after)} interchanges:            "
+              f"{batch.seconds / len(t_qc_after):.3f} (startup {batch.startup_seconds:.2f} s once)")
     return 0 if n and all(passed[c] == n for c in CHECKS) else 1
 
 

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import subprocess
+
 import pytest
+from lxml import etree
 
 from flyover.cli import main
 from flyover.geometry.model import write_geometry
 from flyover.opendrive import qc
 from flyover.opendrive.samples import SAMPLES, sample_geometry
-from flyover.opendrive.validate import CHECKS, validate_xodr
+from flyover.opendrive.validate import CHECKS, validate_xodr, xsd_errors
 from flyover.opendrive.writer import write_xodr
 
 pytestmark = pytest.mark.integration
@@ -46,7 +49,76 @@ def test_every_check_passes_and_every_movement_routes(built, kind):
     assert all(r.ok for r in results), [r for r in results if not r.ok]
     assert (built[kind] / "interchange.net.xml").stat().st_size > 0
     assert "movements routable" in results[-1].detail
-    assert times["netconvert"] > 0
+    assert times["netconvert"] > 0 and times["asam_qc"] > 0
+
+
+def test_asam_qc_completes_every_checker_over_the_file_and_its_1_7_rendition(built):
+    asam = validate_xodr(built["t"] / "interchange.xodr", geometry=sample_geometry("t"))[0][1]
+    n = len(qc.run_asam_checker(built["t"] / "interchange.xodr"))
+    assert asam.ok, asam.detail
+    assert asam.detail.startswith(f"{n}/{n} checkers completed, 0 issues; on 1.8 (the file): {n - 1} completed")
+    assert "on 1.7 (written from geometry.json)" in asam.detail
+    assert "not applicable to version 1.8: check_asam_xodr_junctions_connection_one_connection_element" \
+        in asam.detail
+    assert "not applicable to version 1.7: check_asam_xodr_junctions_connection_one_link_to_incoming" \
+        in asam.detail
+
+
+def test_asam_qc_fails_on_a_file_that_can_only_be_checked_in_its_own_version(built):
+    asam = validate_xodr(built["t"] / "interchange.xodr")[0][1]  # no geometry: no 1.7 rendition
+    assert not asam.ok
+    assert "0 issues" in asam.detail
+    assert "not completed on any rendition: check_asam_xodr_junctions_connection_one_connection_element" \
+        in asam.detail
+    assert "no 1.7 rendition" in asam.detail
+
+
+def _without_one_lane_link(data: bytes) -> bytes:
+    """The file with the lane link of one lane across two lane sections of a road removed."""
+    root = etree.fromstring(data)
+    for road in root.iter("road"):
+        sections = road.findall("lanes/laneSection")
+        for sec in sections[:-1]:
+            for lane in sec.iter("lane"):
+                link = lane.find("link")
+                if link is not None and link.find("successor") is not None:
+                    lane.remove(link)
+                    return etree.tostring(root, xml_declaration=True, encoding="UTF-8")
+    raise AssertionError("no lane link across lane sections")
+
+
+def test_a_file_missing_a_lane_link_fails_asam_qc(built, tmp_path):
+    bad = tmp_path / "interchange.xodr"
+    bad.write_bytes(_without_one_lane_link((built["t"] / "interchange.xodr").read_bytes()))
+    results = {r.check: r for r in validate_xodr(bad, geometry=sample_geometry("t"))[0]}
+    assert results["xsd"].ok  # still valid against the schema: only the checker sees it
+    assert not results["asam_qc"].ok
+    assert "check_asam_xodr_road_lane_link_lanes_across_lane_sections on 1.8: Missing lane link." \
+        in results["asam_qc"].detail
+    assert "no 1.7 rendition: the file is not what flyover writes" in results["asam_qc"].detail
+
+
+def test_one_checker_process_gives_what_the_checkers_own_command_gives(built, tmp_path):
+    bad = tmp_path / "bad.xodr"
+    bad.write_bytes(_without_one_lane_link((built["t"] / "interchange.xodr").read_bytes()))
+    files = [built["t"] / "interchange.xodr", bad, built["loop"] / "interchange.xodr"]
+    batch = qc.run_qc_batch(files)
+    assert [r.error for r in batch.checker] == ["", "", ""]
+    for f, run in zip(files, batch.checker):
+        cfg, res = tmp_path / "config.xml", tmp_path / "result.xqar"
+        cfg.write_text(qc.checker_config(f.resolve(), res))
+        subprocess.run([str(qc.find_qc_python()), "-m", "qc_opendrive", "-c", str(cfg)], cwd=tmp_path,
+                       capture_output=True, check=True)
+        assert list(run.outcomes) == qc.parse_result(res), f
+    assert any(o.issues for o in batch.checker[1].outcomes)
+
+
+def test_xsd_11_validation_in_the_checker_process_reports_errors(built, tmp_path):
+    bad = tmp_path / "bad.xodr"
+    bad.write_bytes((built["t"] / "interchange.xodr").read_bytes().replace(b'<road ', b'<road foo="1" ', 1))
+    assert xsd_errors(built["t"] / "interchange.xodr", (1, 8)) == []
+    errors = xsd_errors(bad, (1, 8))
+    assert errors and errors[0].startswith("line ") and "foo" in errors[0]
 
 
 def test_across_versions_1_7_and_1_8_every_checker_completes_without_issue(tmp_path):

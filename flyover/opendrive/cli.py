@@ -15,8 +15,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Run every check on OpenDRIVE files (ours or anyone's); exit 1 if any fails.")
     val.add_argument("files", nargs="+", metavar="FILE.xodr")
     val.add_argument("--geometry", metavar="GEOMETRY.json",
-                     help="flyover geometry to derive the movements to route "
-                          "(default: geometry.json beside the file, if any)")
+                     help="flyover geometry the file was written from: the movements to route, and "
+                          "the file's 1.7/1.8 rendition that the ASAM checker needs to complete "
+                          "every checker (default: geometry.json beside the file, if any)")
     val.add_argument("--net", metavar="NET.xml", help="keep the SUMO network here (one file only)")
     val.add_argument("--no-qc", action="store_true", help="leave out the ASAM checker")
     val.set_defaults(func=_validate)

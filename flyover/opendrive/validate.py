@@ -6,9 +6,20 @@ Checks (the ``check`` column of ``results/validation.parquet``):
     The file against the ASAM XSD of the version its header declares (the
     XSDs bundled with the ASAM checker).
 ``asam_qc``
-    The ASAM OpenDRIVE checker bundle: ok when it reports zero issues and no
-    checker ended in error. Checkers the bundle itself skips because they do
-    not apply to the declared version are listed in the detail.
+    The ASAM OpenDRIVE checker bundle (1.0.0), ok only when every one of its
+    checkers completed, none ended in error and none reported an issue. One
+    of them applies up to OpenDRIVE 1.7 only, another from 1.8 on, so no one
+    file completes them all: the bundle also runs on the interchange's
+    rendition in the other version (1.7 for a 1.8 file and back), written by
+    flyover's writer from the interchange's geometry, and the verdict is over
+    the union (:func:`flyover.opendrive.qc.bundle_verdict`; the detail lists
+    which checkers ran on which rendition). A rendition is made only when the
+    file is exactly what the writer makes of that geometry (then the two
+    renditions differ in the declared version alone); relabelling anyone
+    else's file would judge it by rules of a version it does not declare
+    (1.8 allows one connecting road in several connection elements, 1.7
+    forbids it). Without a rendition the checker that does not apply to the
+    file's version is reported as not applicable to it, and the check fails.
 ``continuity``
     Our own check, :mod:`flyover.opendrive.continuity`.
 ``netconvert``
@@ -22,9 +33,8 @@ from __future__ import annotations
 
 import logging
 import os
-import subprocess
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from lxml import etree
@@ -34,8 +44,10 @@ from flyover.geometry.model import InterchangeGeometry
 from flyover.opendrive import qc
 from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import XodrNetwork, read_xodr
+from flyover.opendrive.writer import ExportOptions, xodr_bytes
 
-__all__ = ["CheckResult", "CHECKS", "xsd_errors", "movements", "validate_xodr"]
+__all__ = ["CheckResult", "CHECKS", "OtherVersion", "xsd_errors", "other_rendition", "movements",
+           "validate_xodr"]
 
 log = logging.getLogger(__name__)
 
@@ -44,11 +56,8 @@ _XSD = {(1, 1): "1.1/OpenDRIVE_1.1.xsd", (1, 2): "1.2/OpenDRIVE_1.2.xsd",
         (1, 3): "1.3/OpenDRIVE_1.3.xsd", (1, 4): "1.4/OpenDRIVE_1.4H.xsd",
         (1, 5): "1.5/OpenDRIVE_1.5M.xsd", (1, 6): "1.6.1/opendrive_16_core.xsd",
         (1, 7): "1.7.0/opendrive_17_core.xsd", (1, 8): "1.8.0/OpenDRIVE_Core.xsd"}
-_XSD11 = """import sys, xmlschema
-schema = xmlschema.XMLSchema11(sys.argv[1])
-for e in schema.iter_errors(sys.argv[2]):
-    print(f"line {e.sourceline}: {e.reason}")
-"""
+#: the versions whose union completes every checker of the ASAM bundle 1.0.0
+_RENDERED = ((1, 7), (1, 8))
 
 
 @dataclass(frozen=True)
@@ -60,26 +69,73 @@ class CheckResult:
     detail: str
 
 
+def _xsd_path(path: str | os.PathLike, version: tuple[int, int]) -> Path:
+    rel = _XSD.get(tuple(version))
+    if rel is None:
+        raise qc.QCError(f"no ASAM schema for OpenDRIVE {version[0]}.{version[1]}", source=str(path))
+    return qc.schema_dir() / rel
+
+
+def _xsd10_errors(path: str | os.PathLike, xsd: Path) -> list[str]:
+    schema = etree.XMLSchema(etree.parse(str(xsd)))
+    schema.validate(etree.parse(str(path)))
+    return [f"line {e.line}: {e.message}" for e in schema.error_log]
+
+
 def xsd_errors(path: str | os.PathLike, version: tuple[int, int]) -> list[str]:
     """Schema errors of ``path`` against the ASAM XSD of its ``version`` (1.1–1.8).
 
     Up to 1.7 the schemas are XSD 1.0 (lxml, here); 1.8 needs XSD 1.1, which
     runs with ``xmlschema`` in the checker's environment.
     """
-    rel = _XSD.get(tuple(version))
-    if rel is None:
-        raise qc.QCError(f"no ASAM schema for OpenDRIVE {version[0]}.{version[1]}", source=str(path))
-    xsd = qc.schema_dir() / rel
-    if tuple(version) >= (1, 8):
-        res = subprocess.run([str(qc.find_qc_python()), "-c", _XSD11, str(xsd), str(path)],
-                             capture_output=True, text=True)
-        if res.returncode != 0:
-            raise qc.QCError(f"XSD 1.1 validation failed to run: {res.stderr.strip()[-300:]}",
-                             source=str(path))
-        return [ln for ln in res.stdout.splitlines() if ln.strip()]
-    schema = etree.XMLSchema(etree.parse(str(xsd)))
-    schema.validate(etree.parse(str(path)))
-    return [f"line {e.line}: {e.message}" for e in schema.error_log]
+    xsd = _xsd_path(path, version)
+    if tuple(version) < (1, 8):
+        return _xsd10_errors(path, xsd)
+    run = qc.run_qc_batch(xsd11=[(xsd, path)]).xsd11[0]
+    if run.error:
+        raise qc.QCError(f"XSD 1.1 validation failed to run: {run.error}", source=str(path))
+    return list(run.errors)
+
+
+@dataclass(frozen=True)
+class OtherVersion:
+    """A file's rendition in the other of OpenDRIVE 1.7/1.8, or why there is none.
+
+    ``version`` and ``data`` are ``None`` exactly when ``reason`` says why.
+    """
+
+    version: tuple[int, int] | None
+    data: bytes | None
+    reason: str = ""
+
+
+def other_rendition(data: bytes, version: tuple[int, int], geometry: InterchangeGeometry | None,
+                    options: ExportOptions | None = None) -> OtherVersion:
+    """The file ``data`` (declaring ``version``) in the other of OpenDRIVE 1.7/1.8, if it can be made.
+
+    Written by flyover's writer from ``geometry`` with ``options``, and only
+    when ``data`` is byte for byte what the writer makes of them in
+    ``version``: then the rendition is the same interchange, declared in the
+    other version.
+    """
+    version = tuple(version)
+    if version not in _RENDERED:
+        return OtherVersion(None, None, "no 1.7/1.8 rendition: flyover renders only the files it "
+                                        "writes (OpenDRIVE 1.7 and 1.8)")
+    other = next(v for v in _RENDERED if v != version)
+    name = f"{other[0]}.{other[1]}"
+    if geometry is None:
+        return OtherVersion(None, None, f"no {name} rendition: only the file's own version can be "
+                                        "checked (no geometry.json to write one from)")
+    opts = options or ExportOptions()
+    try:
+        if xodr_bytes(geometry, replace(opts, opendrive_minor=version[1])) != data:
+            return OtherVersion(None, None, f"no {name} rendition: the file is not what flyover "
+                                            "writes from its geometry.json (edited, or other "
+                                            "export options)")
+        return OtherVersion(other, xodr_bytes(geometry, replace(opts, opendrive_minor=other[1])))
+    except FlyoverError as exc:
+        return OtherVersion(None, None, f"no {name} rendition: {exc.one_line()}")
 
 
 def movements(g: InterchangeGeometry) -> list[tuple[str, str]]:
@@ -129,53 +185,84 @@ def _movement_roads(net: XodrNetwork, pairs: list[tuple[str, str]]):
     return [Movement(f"{u}->{v}", first.get(u, "?"), last.get(v, "?")) for u, v in pairs]
 
 
+def _qc_checks(path: Path, data: bytes, net: XodrNetwork, geometry: InterchangeGeometry | None,
+               options: ExportOptions | None, run_qc: bool, times: dict[str, float]
+               ) -> list[CheckResult]:
+    """The ``xsd`` and ``asam_qc`` rows, from one process of the checker's environment."""
+    vname = f"{net.version[0]}.{net.version[1]}"
+    try:
+        xsd = _xsd_path(path, net.version)
+    except FlyoverError as exc:
+        xsd, xsd_failed = None, exc.one_line()
+    xsd11 = [(xsd, path)] if xsd is not None and net.version >= (1, 8) else []
+    other = (other_rendition(data, net.version, geometry, options) if run_qc
+             else OtherVersion(None, None))
+    batch, error = None, ""
+    with tempfile.TemporaryDirectory(prefix="flyover-qc-") as tmp:
+        files = [path] if run_qc else []
+        if other.data is not None:
+            files.append(Path(tmp) / f"rendition_{other.version[0]}_{other.version[1]}.xodr")
+            files[-1].write_bytes(other.data)
+        if files or xsd11:
+            try:
+                batch = qc.run_qc_batch(files, xsd11=xsd11)
+                times["asam_qc"] = batch.seconds
+            except FlyoverError as exc:
+                error = exc.one_line()
+
+    if xsd is None:
+        errs = None
+    elif not xsd11:
+        errs = _xsd10_errors(path, xsd)
+    elif batch is None:
+        errs, xsd_failed = None, error
+    elif batch.xsd11[0].error:
+        errs, xsd_failed = None, f"{path}: XSD 1.1 validation failed to run: {batch.xsd11[0].error}"
+    else:
+        errs = list(batch.xsd11[0].errors)
+    rows = [CheckResult("xsd", False, xsd_failed) if errs is None else CheckResult(
+        "xsd", not errs, f"OpenDRIVE {vname}: " + ("valid" if not errs else
+                                                   f"{len(errs)} errors; " + "; ".join(errs[:3])))]
+    if not run_qc:
+        return rows
+    if batch is None:
+        rows.append(CheckResult("asam_qc", False, error))
+    elif failed := [r.error for r in batch.checker if r.error]:
+        rows.append(CheckResult("asam_qc", False, "; ".join(failed)))
+    else:
+        rends = [qc.Rendition(vname, "the file", batch.checker[0].outcomes)]
+        if other.version is not None:
+            rends.append(qc.Rendition(f"{other.version[0]}.{other.version[1]}",
+                                      "written from geometry.json", batch.checker[1].outcomes))
+        rows.append(CheckResult("asam_qc", *qc.bundle_verdict(rends, [other.reason] if other.reason else [])))
+    return rows
+
+
 def validate_xodr(path: str | os.PathLike, *, geometry: InterchangeGeometry | None = None,
+                  options: ExportOptions | None = None,
                   net_out: str | os.PathLike | None = None, run_qc: bool = True
                   ) -> tuple[list[CheckResult], dict[str, float], tuple[str, ...]]:
     """Run every check on one OpenDRIVE file.
 
-    Returns the check results (in :data:`CHECKS` order), timings in seconds
-    (``netconvert``) and netconvert's warnings. A check that cannot run is a
-    failed check with the reason as detail; nothing is skipped silently.
+    ``geometry`` (and the export ``options`` the file was written with) give
+    the movements to route and the rendition in the other OpenDRIVE version
+    for the ASAM checker (see the module's ``asam_qc``). Returns the check
+    results (in :data:`CHECKS` order), timings in seconds (``asam_qc``: the
+    checker's process, ``netconvert``) and netconvert's warnings. A check
+    that cannot run is a failed check with the reason as detail; nothing is
+    skipped silently.
     """
     from flyover.sumo.netconvert import run_netconvert  # noqa: PLC0415
     from flyover.sumo.routes import check_routes, generic_routes  # noqa: PLC0415
 
     path = Path(path)
-    results: list[CheckResult] = []
     times: dict[str, float] = {}
     try:
         net = read_xodr(path)
+        data = path.read_bytes()
     except FlyoverError as exc:
         return [CheckResult(c, False, exc.one_line()) for c in CHECKS], times, ()
-    try:
-        errs = xsd_errors(path, net.version)
-        results.append(CheckResult("xsd", not errs, f"OpenDRIVE {net.version[0]}.{net.version[1]}: "
-                                   + ("valid" if not errs else f"{len(errs)} errors; " + "; ".join(errs[:3]))))
-    except FlyoverError as exc:
-        results.append(CheckResult("xsd", False, exc.one_line()))
-    if run_qc:
-        try:
-            outcomes = qc.run_asam_checker(path)
-            issues = [i for o in outcomes for i in o.issues]
-            errored = [o.checker_id for o in outcomes if o.status == "error"]
-            by_version = [o.checker_id for o in outcomes
-                          if o.status == "skipped" and o.summary.startswith("Version")]
-            skipped = [o.checker_id for o in outcomes
-                       if o.status == "skipped" and o.checker_id not in by_version]
-            done = sum(o.status == "completed" for o in outcomes)
-            detail = f"{done}/{len(outcomes)} checkers completed, {len(issues)} issues"
-            if by_version:
-                detail += "; not applicable to this version: " + ", ".join(by_version)
-            if skipped:
-                detail += f"; {len(skipped)} skipped on failed preconditions"
-            if errored:
-                detail += "; errors in: " + ", ".join(errored)
-            for i in issues[:3]:
-                detail += f"; {i.checker_id}: {i.description} at {i.where[:160]}"
-            results.append(CheckResult("asam_qc", not (issues or errored or skipped), detail))
-        except (FlyoverError, OSError) as exc:
-            results.append(CheckResult("asam_qc", False, str(exc)))
+    results = _qc_checks(path, data, net, geometry, options, run_qc, times)
     try:
         ok, detail = check_continuity(net)
         results.append(CheckResult("continuity", ok, detail))
