@@ -22,6 +22,7 @@ rule all:
         "results/classes/manifest.json",
         class_topology_outputs,
         "results/validation.parquet",
+        export_outputs,
         "results/geometry.parquet",
         "results/coverage.parquet",
     default_target: True

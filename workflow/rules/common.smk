@@ -12,6 +12,7 @@ validate_config(config, "config/config.yaml")
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 1
 EXPORT_VERSION = 1
+VALIDATION_VERSION = 2
 
 
 wildcard_constraints:
@@ -95,6 +96,7 @@ def exported_interchanges():
 
 
 def validation_tables(wildcards):
+    """Every interchange's rows of validation.parquet (made from geometry.json alone)."""
     return [
         f"results/interchanges/{c}/{s}/validation.parquet"
         for c, s in exported_interchanges()
@@ -102,6 +104,8 @@ def validation_tables(wildcards):
 
 
 def export_outputs(wildcards):
+    """Every interchange's .xodr, SUMO network and plan (targets of rule all, not inputs
+    of the validation table: one failed export must not keep the table from being built)."""
     return [
         f"results/interchanges/{c}/{s}/{name}"
         for c, s in exported_interchanges()

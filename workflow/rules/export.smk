@@ -1,4 +1,13 @@
 # Step 5: geometry.json → OpenDRIVE (.xodr, plan.png) → SUMO network; validation table.
+#
+# One interchange that cannot be written or converted must not cost the table: each
+# interchange's validation reads only its geometry.json and writes the .xodr itself (same
+# writer, same options, same bytes as export_xodr), so a failed export_xodr/export_sumo
+# job (reported, nothing half-written; the default profile keeps going) leaves a failed
+# `export`/`netconvert` row in results/validation.parquet instead of a missing table.
+# The files themselves are targets of rule all (export_outputs in common.smk).
+
+
 rule export_xodr:
     """One interchange: geometry.json → interchange.xodr (OpenDRIVE 1.8) and plan.png."""
     input:
@@ -12,6 +21,7 @@ rule export_xodr:
         "../envs/flyover.yaml"
     params:
         version=EXPORT_VERSION,
+        export=config["export"],
     benchmark:
         "logs/benchmarks/export_xodr/{class_id}/{sample}.tsv"
     script:
@@ -37,9 +47,8 @@ rule export_sumo:
 
 
 rule validate_interchange:
-    """One interchange: XSD, ASAM checker, 3D continuity, netconvert, routes."""
+    """One interchange: export, XSD, ASAM checker (1.8 and 1.7), 3D continuity, netconvert, routes."""
     input:
-        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
         geometry="results/interchanges/{class_id}/{sample}/geometry.json",
     output:
         table="results/interchanges/{class_id}/{sample}/validation.parquet",
@@ -48,7 +57,8 @@ rule validate_interchange:
     conda:
         "../envs/flyover.yaml"
     params:
-        version=EXPORT_VERSION,
+        version=VALIDATION_VERSION,
+        export=config["export"],
         asam_qc=config["validation"]["asam_qc"],
     benchmark:
         "logs/benchmarks/validate/{class_id}/{sample}.tsv"
@@ -60,7 +70,6 @@ rule validation:
     """All interchanges → results/validation.parquet."""
     input:
         tables=validation_tables,
-        exported=export_outputs,
     output:
         table="results/validation.parquet",
     log:
@@ -68,6 +77,6 @@ rule validation:
     conda:
         "../envs/flyover.yaml"
     params:
-        version=EXPORT_VERSION,
+        version=VALIDATION_VERSION,
     script:
         "../scripts/export_validation_table.py"
