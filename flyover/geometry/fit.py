@@ -38,12 +38,11 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
 from scipy.optimize import differential_evolution
-from scipy.spatial import cKDTree
 
+from flyover.geometry import _kernels
 from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline, turning
 from flyover.geometry.profile import climb_distance, elevation_polys, heights, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
@@ -124,16 +123,17 @@ class Obstacles:
     owner: tuple[str, ...] = ()
     line_names: tuple[str, ...] = ()
 
-    @cached_property
-    def box(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper corners ``(x, y, z)`` of :attr:`points`."""
-        pts = np.column_stack([self.points, self.z])
-        return pts.min(0), pts.max(0)
-
-    @cached_property
-    def tree(self) -> cKDTree:
-        """KD-tree of :attr:`points` (built once)."""
-        return cKDTree(self.points)
+    def grid(self, cell: float) -> tuple:
+        """:attr:`points` bucketed in cells of side ``cell`` for the conflict kernel (cached)."""
+        cache = self.__dict__.setdefault("_grids", {})
+        if cell not in cache:
+            order, starts, x0, y0, nx, ny = _kernels.grid(self.points, cell)
+            pts = np.ascontiguousarray(self.points[order])
+            cache[cell] = (np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]),
+                           np.ascontiguousarray(self.z[order], float),
+                           np.ascontiguousarray(self.half_width[order], float),
+                           starts, x0, y0, float(cell), nx, ny)
+        return cache[cell]
 
 
 @dataclass(frozen=True)
@@ -310,44 +310,31 @@ def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
     return top if spec.z_crest is None else np.maximum(top, spec.z_crest)
 
 
+def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) -> tuple:
+    """The conflict kernel's arguments for one ramp: half width, clearance, roads, ramp grid."""
+    hw = 0.5 * spec.width_m - settings.margin_m
+    reach = hw + (float(obstacles.half_width.max()) if len(obstacles.half_width) else 0.0)
+    grid = obstacles.grid(float(max(10.0, np.ceil(reach))))
+    lines = np.ascontiguousarray(obstacles.lines, float).reshape(-1, 9)
+    return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
+
+
+def _column(v, p: int) -> np.ndarray:
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(v, float), (p,)))
+
+
 def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
                settings: FitSettings) -> np.ndarray:
     """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level."""
     speed = np.maximum(np.hypot(tangent[..., 0], tangent[..., 1]), 1e-9)
-    right = np.stack([tangent[..., 1], -tangent[..., 0]], axis=-1) / speed[..., None]
-    c = xy + 0.5 * spec.width_m * right
-    inner = (s > settings.end_zone_m) & (s < length[:, None] - settings.end_zone_m)
-    hw = 0.5 * spec.width_m - settings.margin_m
-    bad = np.zeros(s.shape, bool)
-    if len(obstacles.lines):  # all roads at once: (..., N, L)
-        x0, y0, dx, dy, tlo, thi, llo, lhi, zl = obstacles.lines.T
-        rx, ry = c[..., 0, None] - x0, c[..., 1, None] - y0
-        along = rx * dx + ry * dy
-        lat = dx * ry - dy * rx
-        hit = (along > tlo) & (along < thi) & (lat > llo - hw) & (lat < lhi + hw)
-        bad |= (hit & (np.abs(z[..., None] - zl) < settings.clearance_m)).any(-1)
-    if len(obstacles.points):
-        reach = hw + float(obstacles.half_width.max())
-        lo, hi = obstacles.box
-        # only inner samples near the obstacles' box and height range can meet them
-        zz = np.broadcast_to(z, s.shape)
-        cand = (inner & (zz > lo[2] - settings.clearance_m) & (zz < hi[2] + settings.clearance_m)
-                & (c[..., 0] > lo[0] - reach) & (c[..., 0] < hi[0] + reach)
-                & (c[..., 1] > lo[1] - reach) & (c[..., 1] < hi[1] + reach) & ~bad)
-        sel = np.flatnonzero(cand.ravel())
-        if len(sel):
-            flat = c.reshape(-1, 2)[sel]
-            dist, idx = obstacles.tree.query(flat, k=min(4, len(obstacles.points)),
-                                             distance_upper_bound=reach)
-            dist, idx = dist.reshape(len(flat), -1), idx.reshape(len(flat), -1)
-            found = np.isfinite(dist)
-            j = np.where(found, idx, 0)
-            near = found & (dist < hw + obstacles.half_width[j])
-            low = np.abs(zz.reshape(-1)[sel][:, None] - obstacles.z[j]) < settings.clearance_m
-            hit = np.zeros(bad.size, bool)
-            hit[sel] = (near & low).any(-1)
-            bad |= hit.reshape(bad.shape)
-    return (bad & inner).sum(-1)
+    half = 0.5 * spec.width_m / speed
+    cx = xy[..., 0] + half * tangent[..., 1]  # lane centre: half the width to the right
+    cy = xy[..., 1] - half * tangent[..., 0]
+    return _kernels.conflicts(np.ascontiguousarray(cx), np.ascontiguousarray(cy),
+                              np.ascontiguousarray(s, float),
+                              np.ascontiguousarray(np.broadcast_to(z, s.shape), float),
+                              np.ascontiguousarray(length, float),
+                              *_obstacle_args(spec, obstacles, settings))
 
 
 def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
@@ -359,32 +346,30 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     g = spec.target_slope_pct / 100.0
     r_t = spec.target_radius_m
 
+    kernel_args = _obstacle_args(spec, obstacles, settings)
+
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
         dec = _decode(spec, x)
-        smp = sample_spline(dec.ctrl, m)
-        length = smp.length
-        kappa = smp.curvature
-        rmin = lane_radius(kappa, spec.width_m).min(-1)
-        za, zb = dec.a[3], dec.b[3]
-        zc = _crest(spec, za, zb)
+        p = x.shape[1]
+        za, zb = _column(dec.a[3], p), _column(dec.b[3], p)
+        zc = _column(_crest(spec, za, zb), p)
+        length, rmin, turned, kvar, k2, g2, conf = _kernels.spline_terms(
+            np.ascontiguousarray(dec.ctrl), m, float(spec.width_m), za, zc, zb,
+            g if g > 0 else 1.0, float(settings.transition_m), *kernel_args)
         need = climb_distance(zc - za, g, settings.transition_m) + \
             climb_distance(zc - zb, g, settings.transition_m) if g > 0 else 0 * length
         shortfall = np.clip(need - length, 0, None) / np.maximum(need, 1.0)
         if g <= 0:
-            shortfall = np.where(np.abs(za - zb) > 1e-6, 1.0, 0.0) + 0 * length
-        turn_err = np.abs(turning(smp.tangent) - dec.turn)
-        kk = kappa.reshape(kappa.shape[0], spec.pieces, m)
-        g2 = ((kk[:, 1:, 0] - kk[:, :-1, -1]) ** 2).sum(-1) if spec.pieces > 1 else 0 * length
+            shortfall = np.where(np.abs(za - zb) > 1e-6, 1.0, 0.0)
+        turn_err = np.abs(turned - dec.turn)
         if math.isinf(r_t):
             rad_err = 0 * length
-            smooth = (kappa**2).mean(-1) * settings.inf_reference_m**2
+            smooth = k2 * settings.inf_reference_m**2
             g2 = g2 * settings.inf_reference_m**2
         else:
             rad_err = (rmin - r_t) / r_t
-            smooth = kappa.var(-1) * r_t**2
+            smooth = kvar * r_t**2
             g2 = g2 * r_t**2
-        z = heights(smp.s, length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
-        conf = _conflicts(spec, smp.xy, smp.tangent, smp.s, z, length, obstacles, settings)
         r_eff = min(r_t, settings.inf_reference_m)
         chord = np.hypot(dec.b[0] - dec.a[0], dec.b[1] - dec.a[1])
         chord = np.where(np.abs(dec.turn) < 0.3, chord, 0.0)  # straight-on ramps only
@@ -435,8 +420,10 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
     and ``CR`` adapt per generation from the successful trials (Zhang &
     Sanderson, IEEE TEC 13(5), 2009); a trial leaving the bounds is put halfway
     between its parent and the bound. ``init`` rows (decision vectors) replace
-    the first rows of the Latin-hypercube start. ``stop(x_best, f_best, gen)``
-    ends the search when it returns True. Deterministic for a seed.
+    the first rows of the Latin-hypercube start. After each generation
+    ``stop(population, energies, gen)`` may end the search: ``True`` returns
+    the best candidate, an index returns that candidate, ``None`` goes on.
+    Deterministic for a seed.
     """
     rng = np.random.default_rng(seed)
     lo = np.array([b[0] for b in bounds_], float)
@@ -497,8 +484,11 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
             mu_f = (1 - c) * mu_f + c * float((w * fs**2).sum() / max((w * fs).sum(), 1e-12))
         pop[win], energy[win] = trial[win], e_trial[win]
         ib = int(np.argmin(energy))
-        if stop is not None and stop(pop[ib], float(energy[ib]), gen):
-            break
+        if stop is not None:
+            verdict = stop(pop, energy, gen)
+            if verdict is not None:
+                ib = ib if verdict is True else int(verdict)
+                break
     return _Search(pop[ib].copy(), float(energy[ib]), evals, gen)
 
 
@@ -552,16 +542,29 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
 
-    def stop(x: np.ndarray, fun: float, generation: int) -> bool:
+    def stop(pop: np.ndarray, energy: np.ndarray, generation: int):
         gen[0] = generation
+        fun = float(energy.min())
         if fun < best[0] - 0.01 * abs(best[0]) or not np.isfinite(best[0]):
             best[0], best[1] = fun, generation
         elif settings.patience and generation - best[1] >= settings.patience:
             return True  # stagnated: more generations will not meet the targets
-        return generation >= settings.min_generations and good(x)
+        if generation < settings.min_generations:
+            return None
+        # the lowest-energy candidate that meets the targets on fine samples
+        tried = 0
+        for j in np.argsort(energy, kind="stable"):
+            if np.ascontiguousarray(pop[j]).tobytes() in coarse_good:
+                if good(pop[j]):
+                    return int(j)
+                tried += 1
+                if tried == 3:
+                    break
+        return None
 
     def scipy_stop(intermediate_result) -> bool:  # scipy passes the result by this name
-        return stop(intermediate_result.x, float(intermediate_result.fun), gen[0] + 1)
+        x = intermediate_result.x
+        return stop(x[None], np.array([intermediate_result.fun]), gen[0] + 1) is not None
 
     t0 = time.perf_counter()
     if settings.engine == "jade":

@@ -1,0 +1,204 @@
+"""Compiled inner loop of the ramp objective (numba): same-level conflicts.
+
+:func:`conflicts` counts, per candidate ramp, the lane-centre samples that
+meet an obstacle at the same level (closer than ``clearance`` in height):
+
+* a road's driving band, given in its own frame (``lines`` rows
+  ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, z``), widened by the ramp's
+  half width;
+* a sample of an already fitted ramp closer than the two half widths.
+
+Ramp samples sit in a uniform grid (:func:`grid`, cells of at least the
+largest reach), so each candidate sample looks at the 3 x 3 cells around it.
+Only the inner samples count (``end_zone`` from either end, where a ramp
+leaves or joins its parent, is exempt).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["grid", "conflicts"]
+
+
+def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float, float, int, int]:
+    """Bucket ``points`` ``(N, 2)`` into square cells of side ``cell``.
+
+    Returns the point order (by cell), the first index of each cell in that
+    order (``nx * ny + 1`` entries), the grid origin and its size in cells.
+    """
+    if len(points) == 0:
+        return np.zeros(0, np.int64), np.zeros(2, np.int64), 0.0, 0.0, 1, 1
+    x0, y0 = points.min(0) - cell
+    nx = int((points[:, 0].max() - x0) // cell) + 2
+    ny = int((points[:, 1].max() - y0) // cell) + 2
+    key = ((points[:, 0] - x0) // cell).astype(np.int64) * ny + \
+        ((points[:, 1] - y0) // cell).astype(np.int64)
+    order = np.argsort(key, kind="stable")
+    starts = np.searchsorted(key[order], np.arange(nx * ny + 1))
+    return order, starts.astype(np.int64), float(x0), float(y0), nx, ny
+
+
+@njit(cache=True, nogil=True)
+def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
+              px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover - compiled
+    """Conflicting inner samples per candidate: ``(P,)`` from samples ``(P, N)``.
+
+    ``px, py, pz, phw``: obstacle ramp samples sorted by grid cell
+    (``starts`` per cell, see :func:`grid`).
+    """
+    p_count, n = cx.shape
+    out = np.zeros(p_count, np.int64)
+    n_lines = lines.shape[0]
+    for p in range(p_count):
+        hi_s = length[p] - end_zone
+        for i in range(n):
+            si = s[p, i]
+            if si <= end_zone or si >= hi_s:
+                continue
+            x, y, zz = cx[p, i], cy[p, i], z[p, i]
+            hit = False
+            for k in range(n_lines):
+                if abs(zz - lines[k, 8]) >= clearance:
+                    continue
+                rx, ry = x - lines[k, 0], y - lines[k, 1]
+                along = rx * lines[k, 2] + ry * lines[k, 3]
+                if along <= lines[k, 4] or along >= lines[k, 5]:
+                    continue
+                lat = lines[k, 2] * ry - lines[k, 3] * rx
+                if lat > lines[k, 6] - hw and lat < lines[k, 7] + hw:
+                    hit = True
+                    break
+            if not hit and px.shape[0] > 0:
+                gx = int((x - x0) // cell)
+                gy = int((y - y0) // cell)
+                for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
+                    if hit:
+                        break
+                    for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
+                        c = ix * ny + iy
+                        for j in range(starts[c], starts[c + 1]):
+                            if abs(zz - pz[j]) >= clearance:
+                                continue
+                            dx, dy = x - px[j], y - py[j]
+                            r = hw + phw[j]
+                            if dx * dx + dy * dy < r * r:
+                                hit = True
+                                break
+                        if hit:
+                            break
+            if hit:
+                out[p] += 1
+    return out
+
+
+@njit(cache=True, inline="always")
+def _climb(s, h, grade, transition):  # pragma: no cover - compiled
+    """Height gained after ``s`` metres of a climb of total ``h`` (see profile._climb)."""
+    if h <= 0.0:
+        return 0.0
+    t = max(min(transition, h / grade), 1e-9)
+    d = h / grade + t
+    s = max(s, 0.0)
+    if s >= d:
+        return h
+    if s < t:
+        return grade * s * s / (2.0 * t)
+    if s <= d - t:
+        return grade * t / 2.0 + grade * (s - t)
+    return h - grade * (d - s) ** 2 / (2.0 * t)
+
+
+@njit(cache=True, nogil=True)
+def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, clearance,
+                 lines, px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover
+    """Everything the ramp objective measures on candidate splines ``ctrl`` ``(P, n, 4, 2)``.
+
+    Samples each cubic piece at ``m`` parameter values (as
+    :func:`flyover.geometry.bezier.sample_spline`) and returns per candidate:
+    length, minimum lane-centre radius, total turning, curvature variance,
+    mean squared curvature, squared curvature jumps at joints, and the number
+    of conflicting samples (heights from the grade line of
+    :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``).
+    """
+    p_count, n_p = ctrl.shape[0], ctrl.shape[1]
+    n = n_p * m
+    length = np.zeros(p_count)
+    rmin = np.full(p_count, np.inf)
+    turn = np.zeros(p_count)
+    kvar = np.zeros(p_count)
+    k2 = np.zeros(p_count)
+    g2 = np.zeros(p_count)
+    conf = np.zeros(p_count, np.int64)
+    t = np.linspace(0.0, 1.0, m)
+    xs = np.empty(n)
+    ys = np.empty(n)
+    tx = np.empty(n)
+    ty = np.empty(n)
+    sp = np.empty(n)
+    kap = np.empty(n)
+    ss = np.empty(n)
+    cx = np.empty((1, n))
+    cy = np.empty((1, n))
+    zz = np.empty((1, n))
+    s1 = np.empty((1, n))
+    ln = np.empty(1)
+    for p in range(p_count):
+        off = 0.0
+        for k in range(n_p):
+            q = ctrl[p, k]
+            for i in range(m):
+                u = t[i]
+                v = 1.0 - u
+                b0, b1, b2, b3 = v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u
+                d0, d1, d2, d3 = -3 * v * v, 3 * v * v - 6 * v * u, 6 * v * u - 3 * u * u, 3 * u * u
+                e0, e1, e2, e3 = 6 * v, -12 * v + 6 * u, 6 * v - 12 * u, 6 * u
+                j = k * m + i
+                xs[j] = b0 * q[0, 0] + b1 * q[1, 0] + b2 * q[2, 0] + b3 * q[3, 0]
+                ys[j] = b0 * q[0, 1] + b1 * q[1, 1] + b2 * q[2, 1] + b3 * q[3, 1]
+                dx = d0 * q[0, 0] + d1 * q[1, 0] + d2 * q[2, 0] + d3 * q[3, 0]
+                dy = d0 * q[0, 1] + d1 * q[1, 1] + d2 * q[2, 1] + d3 * q[3, 1]
+                ex = e0 * q[0, 0] + e1 * q[1, 0] + e2 * q[2, 0] + e3 * q[3, 0]
+                ey = e0 * q[0, 1] + e1 * q[1, 1] + e2 * q[2, 1] + e3 * q[3, 1]
+                tx[j], ty[j] = dx, dy
+                speed = np.hypot(dx, dy)
+                sp[j] = speed
+                kap[j] = (dx * ey - dy * ex) / max(speed, 1e-9) ** 3
+                if i == 0:
+                    ss[j] = off
+                else:
+                    off += 0.5 * (speed + sp[j - 1]) / (m - 1)
+                    ss[j] = off
+        length[p] = off
+        mean = 0.0
+        for j in range(n):
+            kj = kap[j]
+            mean += kj
+            k2[p] += kj * kj
+            r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
+            if r < rmin[p]:
+                rmin[p] = r
+            if j > 0:
+                da = np.arctan2(ty[j], tx[j]) - np.arctan2(ty[j - 1], tx[j - 1])
+                turn[p] += (da + np.pi) % (2 * np.pi) - np.pi
+        mean /= n
+        k2[p] /= n
+        kvar[p] = k2[p] - mean * mean
+        for k in range(1, n_p):
+            g2[p] += (kap[k * m] - kap[k * m - 1]) ** 2
+        hr, hf = abs(zc[p] - za[p]), abs(zc[p] - zb[p])
+        sr = 1.0 if zc[p] > za[p] else (-1.0 if zc[p] < za[p] else 0.0)
+        sf = 1.0 if zb[p] > zc[p] else (-1.0 if zb[p] < zc[p] else 0.0)
+        for j in range(n):
+            half = 0.5 * width / max(sp[j], 1e-9)
+            cx[0, j] = xs[j] + half * ty[j]
+            cy[0, j] = ys[j] - half * tx[j]
+            s1[0, j] = ss[j]
+            zz[0, j] = (za[p] + sr * _climb(ss[j], hr, grade, transition)
+                        + sf * (hf - _climb(off - ss[j], hf, grade, transition)))
+        ln[0] = off
+        conf[p] = conflicts(cx, cy, s1, zz, ln, end_zone, hw, clearance, lines,
+                            px, py, pz, phw, starts, x0, y0, cell, nx, ny)[0]
+    kvar = np.maximum(kvar, 0.0)
+    return length, rmin, turn, kvar, k2, g2, conf
