@@ -202,3 +202,90 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
                             px, py, pz, phw, starts, x0, y0, cell, nx, ny)[0]
     kvar = np.maximum(kvar, 0.0)
     return length, rmin, turn, kvar, k2, g2, conf
+
+
+@njit(cache=True, inline="always")
+def _rail_at(s, rs, rx, ry, rh, rz, offset):  # pragma: no cover - compiled
+    """Point (offset to the left), heading and height of a rail at station ``s``."""
+    x = np.interp(s, rs, rx)
+    y = np.interp(s, rs, ry)
+    h = np.interp(s, rs, rh)
+    z = np.interp(s, rs, rz)
+    return x - offset * np.sin(h), y + offset * np.cos(h), h, z
+
+
+@njit(cache=True, nogil=True)
+def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z):  # pragma: no cover
+    """Control points of candidate ramps ``x`` ``(D, P)`` (see ``flyover.geometry.fit``).
+
+    ``a_rail``/``b_rail``: ``(5, K)`` stations, x, y, heading, z of the start
+    and end rails (``K = 0`` when that end is free). ``free_mode``: 0 none,
+    1 free end, 2 free start. Returns ``ctrl (P, n, 4, 2)``, the stations on
+    the rails ``(2, P)``, the end poses ``(2, 4, P)`` (x, y, heading, z) and
+    the intended total turn ``(P,)``.
+    """
+    d_count, p_count = x.shape
+    ctrl = np.empty((p_count, pieces, 4, 2))
+    stations = np.zeros((2, p_count))
+    poses = np.zeros((2, 4, p_count))
+    turn = np.empty(p_count)
+    jx = np.empty(pieces + 1)
+    jy = np.empty(pieces + 1)
+    jh = np.empty(pieces + 1)
+    lam_in = np.empty(pieces)
+    lam_out = np.empty(pieces)
+    for p in range(p_count):
+        i = 0
+        xa = ya = ha = za = xb = yb = hb = zb = 0.0
+        if a_rail.shape[1] > 0:
+            stations[0, p] = x[i, p]
+            xa, ya, ha, za = _rail_at(x[i, p], a_rail[0], a_rail[1], a_rail[2], a_rail[3],
+                                      a_rail[4], a_off)
+            i += 1
+        if b_rail.shape[1] > 0:
+            stations[1, p] = x[i, p]
+            xb, yb, hb, zb = _rail_at(x[i, p], b_rail[0], b_rail[1], b_rail[2], b_rail[3],
+                                      b_rail[4], b_off)
+            i += 1
+        if free_mode > 0:
+            d, e, phi = x[i, p], x[i + 1, p], x[i + 2, p]
+            i += 3
+            if free_mode == 1:  # free end, placed from the start
+                c, s = np.cos(ha), np.sin(ha)
+                xb, yb = xa + d * c - e * s, ya + d * s + e * c
+                hb, zb = ha + turn_rad + phi, free_z
+            else:  # free start, placed from the end
+                c, s = np.cos(hb), np.sin(hb)
+                xa, ya = xb - d * c - e * s, yb - d * s + e * c
+                ha, za = hb - turn_rad - phi, free_z
+        lam_out[0] = x[i, p]
+        lam_in[pieces - 1] = x[i + 1, p]
+        i += 2
+        raw = hb - ha
+        tr = turn_rad + ((raw - turn_rad + np.pi) % (2 * np.pi) - np.pi)
+        turn[p] = tr
+        cx, cy = xb - xa, yb - ya
+        dist = max(np.hypot(cx, cy), 1.0)
+        ux, uy = cx / dist, cy / dist
+        jx[0], jy[0], jh[0] = xa, ya, ha
+        for k in range(1, pieces):
+            u, v, dh = x[i, p], x[i + 1, p], x[i + 2, p]
+            lam_in[k - 1] = x[i + 3, p]
+            lam_out[k] = x[i + 4, p]
+            i += 5
+            f = k / pieces
+            jx[k] = xa + f * cx + u * dist * ux - v * dist * uy
+            jy[k] = ya + f * cy + u * dist * uy + v * dist * ux
+            jh[k] = ha + tr * f + dh
+        jx[pieces], jy[pieces], jh[pieces] = xb, yb, ha + tr
+        for k in range(pieces):
+            span = np.hypot(jx[k + 1] - jx[k], jy[k + 1] - jy[k])
+            ctrl[p, k, 0, 0], ctrl[p, k, 0, 1] = jx[k], jy[k]
+            ctrl[p, k, 1, 0] = jx[k] + lam_out[k] * span * np.cos(jh[k])
+            ctrl[p, k, 1, 1] = jy[k] + lam_out[k] * span * np.sin(jh[k])
+            ctrl[p, k, 2, 0] = jx[k + 1] - lam_in[k] * span * np.cos(jh[k + 1])
+            ctrl[p, k, 2, 1] = jy[k + 1] - lam_in[k] * span * np.sin(jh[k + 1])
+            ctrl[p, k, 3, 0], ctrl[p, k, 3, 1] = jx[k + 1], jy[k + 1]
+        poses[0, 0, p], poses[0, 1, p], poses[0, 2, p], poses[0, 3, p] = xa, ya, ha, za
+        poses[1, 0, p], poses[1, 1, p], poses[1, 2, p], poses[1, 3, p] = xb, yb, hb, zb
+    return ctrl, stations, poses, turn

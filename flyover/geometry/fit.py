@@ -245,64 +245,30 @@ class _Decoded:
     turn: np.ndarray  # intended total heading change (P,)
 
 
-def _decode(spec: RampSpec, x: np.ndarray) -> _Decoded:
-    """Control points for decision vectors ``x`` of shape ``(D, P)``."""
-    i = 0
-    p = x.shape[1]
-    sa = sb = np.zeros(p)
-    if spec.start is not None:
-        sa = x[i]
-        pa, ha, za = spec.start.at(sa)
-        i += 1
-    if spec.end is not None:
-        sb = x[i]
-        pb, hb, zb = spec.end.at(sb)
-        i += 1
-    if spec.free is not None:
-        d, e, phi = x[i], x[i + 1], x[i + 2]
-        i += 3
-        if spec.start is not None:  # free end
-            t, n = heading_vec(ha), heading_vec(ha + np.pi / 2)
-            pb = pa + d[:, None] * t + e[:, None] * n
-            hb, zb = ha + spec.turn_rad + phi, np.full(p, spec.free.z)
-        else:  # free start
-            t, n = heading_vec(hb), heading_vec(hb + np.pi / 2)
-            pa = pb - d[:, None] * t + e[:, None] * n
-            ha, za = hb - spec.turn_rad - phi, np.full(p, spec.free.z)
-    lam_a, lam_b = x[i], x[i + 1]
-    i += 2
-    # intended total turn: the representative of hb - ha nearest spec.turn_rad
-    raw = hb - ha
-    turn = spec.turn_rad + ((raw - spec.turn_rad + np.pi) % (2 * np.pi) - np.pi)
-    n_p = spec.pieces
-    chord = pb - pa
-    dist = np.maximum(np.hypot(chord[:, 0], chord[:, 1]), 1.0)
-    cdir = chord / dist[:, None]
-    cper = np.stack([-cdir[:, 1], cdir[:, 0]], axis=-1)
-    joints = [pa]
-    heads = [ha]
-    lam_in = []
-    lam_out = [lam_a]
-    for k in range(1, n_p):
-        u, v, dh, bi, ao = x[i:i + 5]
-        i += 5
-        base = pa + (k / n_p) * chord
-        joints.append(base + (u * dist)[:, None] * cdir + (v * dist)[:, None] * cper)
-        heads.append(ha + turn * k / n_p + dh)
-        lam_in.append(bi)
-        lam_out.append(ao)
-    joints.append(pb)
-    heads.append(ha + turn)
-    lam_in.append(lam_b)
-    ctrl = np.empty((p, n_p, 4, 2))
-    for k in range(n_p):
-        p0, p3 = joints[k], joints[k + 1]
-        span = np.hypot(*(p3 - p0).T)[:, None]
-        ctrl[:, k, 0] = p0
-        ctrl[:, k, 1] = p0 + lam_out[k][:, None] * span * heading_vec(heads[k])
-        ctrl[:, k, 2] = p3 - lam_in[k][:, None] * span * heading_vec(heads[k + 1])
-        ctrl[:, k, 3] = p3
-    return _Decoded(ctrl, sa, sb, (pa[:, 0], pa[:, 1], ha, za), (pb[:, 0], pb[:, 1], hb, zb), turn)
+def _rail_args(spec: RampSpec) -> tuple:
+    """The decode kernel's description of ``spec``'s ends (rails as ``(5, K)`` arrays)."""
+    def rail(r: Rail | None) -> tuple[np.ndarray, float]:
+        if r is None:
+            return np.zeros((5, 0)), 0.0
+        return np.ascontiguousarray(np.vstack([r.s, r.xy[:, 0], r.xy[:, 1], r.heading, r.z]),
+                                    float), float(r.offset_m)
+
+    mode = 0 if spec.free is None else (1 if spec.start is not None else 2)
+    return (int(spec.pieces), float(spec.turn_rad), *rail(spec.start), *rail(spec.end), mode,
+            float(spec.free.z) if spec.free else 0.0)
+
+
+def _decode(spec: RampSpec, x: np.ndarray, rails: tuple | None = None) -> _Decoded:
+    """Control points for decision vectors ``x`` of shape ``(D, P)``.
+
+    Decision vector: the stations of the attached ends on their rails; for a
+    free end its forward and lateral offset and extra turn; the tangent
+    lengths at both ends (fractions of the piece chord); per interior joint
+    its position (along / across the chord, fractions of it), its heading
+    relative to an even share of the turn, and its two tangent lengths.
+    """
+    ctrl, st, poses, turn = _kernels.decode(np.ascontiguousarray(x, float), *(rails or _rail_args(spec)))
+    return _Decoded(ctrl, st[0], st[1], tuple(poses[0]), tuple(poses[1]), turn)
 
 
 def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
@@ -347,9 +313,10 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     r_t = spec.target_radius_m
 
     kernel_args = _obstacle_args(spec, obstacles, settings)
+    rails = _rail_args(spec)
 
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
-        dec = _decode(spec, x)
+        dec = _decode(spec, x, rails)
         p = x.shape[1]
         za, zb = _column(dec.a[3], p), _column(dec.b[3], p)
         zc = _column(_crest(spec, za, zb), p)
@@ -418,7 +385,8 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
 
     ``f`` maps a population ``(D, P)`` to energies ``(P,)`` in one call. ``F``
     and ``CR`` adapt per generation from the successful trials (Zhang &
-    Sanderson, IEEE TEC 13(5), 2009); a trial leaving the bounds is put halfway
+    Sanderson, IEEE TEC 13(5), 2009; F is truncated to 0.05..1 instead of
+    redrawn); a trial leaving the bounds is put halfway
     between its parent and the bound. ``init`` rows (decision vectors) replace
     the first rows of the Latin-hypercube start. After each generation
     ``stop(population, energies, gen)`` may end the search: ``True`` returns
@@ -444,30 +412,29 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
     n_best = max(2, int(round(0.1 * n)))
     gen = 0
     ib = int(np.argmin(energy))
+    idx = np.arange(n)
     while gen < maxiter:
         gen += 1
-        cr = np.clip(rng.normal(mu_cr, 0.1, n), 0.0, 1.0)
-        fm = mu_f + 0.1 * np.tan(np.pi * (rng.random(n) - 0.5))
-        while np.any(fm <= 0):
-            bad = fm <= 0
-            fm[bad] = mu_f + 0.1 * np.tan(np.pi * (rng.random(int(bad.sum())) - 0.5))
-        fm = np.minimum(fm, 1.0)
+        # one block of uniforms per generation: CR (Box-Muller), F (Cauchy, twice),
+        # p-best, r1, r2, crossover mask and the forced crossover dimension
+        u = rng.random((n, d + 8))
+        cr = np.clip(mu_cr + 0.1 * np.sqrt(-2.0 * np.log1p(-u[:, 0])) * np.cos(2 * np.pi * u[:, 1]),
+                     0.0, 1.0)
+        fm = mu_f + 0.1 * np.tan(np.pi * (u[:, 2] - 0.5))
+        fm = np.where(fm <= 0, mu_f + 0.1 * np.tan(np.pi * (u[:, 3] - 0.5)), fm)
+        fm = np.clip(fm, 0.05, 1.0)[:, None]
         order = np.argsort(energy, kind="stable")
-        pbest = pop[order[rng.integers(0, n_best, n)]]
-        idx = np.arange(n)
-        r1 = (idx + rng.integers(1, n, n)) % n
+        pbest = pop[order[(u[:, 4] * n_best).astype(np.int64)]]
+        r1 = (idx + 1 + (u[:, 5] * (n - 1)).astype(np.int64)) % n
         union = np.vstack([pop, archive]) if len(archive) else pop
-        r2 = rng.integers(0, len(union), n)
-        for _ in range(8):  # r2 differs from i and r1 (redraw the few that clash)
-            clash = (r2 == idx) | (r2 == r1)
-            if not clash.any():
-                break
-            r2[clash] = rng.integers(0, len(union), int(clash.sum()))
-        v = pop + fm[:, None] * (pbest - pop) + fm[:, None] * (pop[r1] - union[r2])
+        r2 = (u[:, 6] * len(union)).astype(np.int64)
+        for _ in range(2):  # r2 differs from i and r1
+            r2 = np.where((r2 == idx) | (r2 == r1), (r2 + 1) % len(union), r2)
+        v = pop + fm * (pbest - pop) + fm * (pop[r1] - union[r2])
         v = np.where(v < lo, (pop + lo) / 2, v)
         v = np.where(v > hi, (pop + hi) / 2, v)
-        cross = rng.random((n, d)) < cr[:, None]
-        cross[idx, rng.integers(0, d, n)] = True
+        cross = u[:, 8:] < cr[:, None]
+        cross[idx, (u[:, 7] * d).astype(np.int64)] = True
         trial = np.where(cross, v, pop)
         e_trial = np.asarray(f(trial.T), float)
         evals += n
@@ -480,7 +447,7 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
             gain = energy[better] - e_trial[better]
             w = gain / gain.sum() if gain.sum() > 0 else np.full(len(gain), 1 / len(gain))
             mu_cr = (1 - c) * mu_cr + c * float((w * cr[better]).sum())
-            fs = fm[better]
+            fs = fm[better, 0]
             mu_f = (1 - c) * mu_f + c * float((w * fs**2).sum() / max((w * fs).sum(), 1e-12))
         pop[win], energy[win] = trial[win], e_trial[win]
         ib = int(np.argmin(energy))
