@@ -8,8 +8,9 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
 * per class: ramps, within tolerance on the first try, resampled, within
   tolerance at the end, recorded infeasible, with a same-level conflict;
 * median / p95 seconds per interchange and per ramp (vectorised DE);
-* the same per ramp for scipy's plain (non-vectorised) DE on the same ramps,
-  with the same stopping rule, i.e. at equal accuracy.
+* the same ramps re-fitted alone with our DE, scipy's vectorised DE and
+  scipy's plain (one call per candidate) DE on the same objective and with
+  the same stopping rule, i.e. at equal accuracy.
 
 Run: ``OMP_NUM_THREADS=1 .venv/bin/python benchmarks/geometry.py --samples 3``
 """
@@ -61,7 +62,7 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=3)
     ap.add_argument("--designs", nargs="*", default=None)
     ap.add_argument("--plain-ramps", type=int, default=12,
-                    help="ramps re-fitted with the plain scipy DE for comparison")
+                    help="ramps re-fitted alone with each DE engine for comparison (0: skip)")
     ap.add_argument("--from-results", action="store_true")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
@@ -106,21 +107,20 @@ def main() -> None:
           f"{np.percentile(ramp_s, 95):.3f}  (n={len(ramp_s)})")
     rng = np.random.default_rng(0)
     pick = rng.choice(len(fits), size=min(args.plain_ramps, len(fits)), replace=False)
-    vec, plain, vec_ok, plain_ok = [], [], 0, 0
-    for i in pick:
-        f = fits[i]
-        obst = None
-        a = fit_ramp(f.spec, obst, settings.fit, seed=7)
-        b = fit_ramp(f.spec, obst, replace(settings.fit, vectorized=False), seed=7)
-        vec.append(a.seconds)
-        plain.append(b.seconds)
-        vec_ok += a.radius_ok and a.slope_ok
-        plain_ok += b.radius_ok and b.slope_ok
-    print(f"same {len(pick)} ramps alone, vectorised DE: median {np.median(vec):.3f} p95 "
-          f"{np.percentile(vec, 95):.3f} s, {vec_ok} within tolerance")
-    print(f"same {len(pick)} ramps alone, plain DE:      median {np.median(plain):.3f} p95 "
-          f"{np.percentile(plain, 95):.3f} s, {plain_ok} within tolerance")
-
+    engines = {"flyover DE (JADE, compiled objective)": settings.fit,
+               "scipy DE, vectorised": replace(settings.fit, engine="scipy"),
+               "scipy DE, plain (one call per candidate)": replace(settings.fit, engine="scipy",
+                                                                    vectorized=False)}
+    for label, fit_settings in engines.items() if len(pick) else ():
+        secs, ok = [], 0
+        for i in pick:
+            f = fits[i]
+            t0 = time.process_time()
+            a = fit_ramp(f.spec, None, fit_settings, seed=7)
+            secs.append(time.process_time() - t0)
+            ok += a.radius_ok and a.slope_ok
+        print(f"same {len(pick)} ramps alone (no obstacles), {label}: median "
+              f"{np.median(secs):.3f} p95 {np.percentile(secs, 95):.3f} CPU s, {ok} within tolerance")
 
 if __name__ == "__main__":
     main()
