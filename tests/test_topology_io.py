@@ -144,3 +144,18 @@ def test_measured_node_attributes_survive_native_graphml(tmp_path):
     write_graphml(t, tmp_path / "m.graphml")
     back = read_graphml(tmp_path / "m.graphml").graph.nodes["r"]
     assert back["length_m"] == 412.5 and back["min_radius_m"] == 88.0 and back["osm_ways"] == "1 2"
+
+
+def test_atomic_write_gives_results_the_umask_mode_not_the_temp_files(tmp_path):
+    import os
+    import stat
+
+    from flyover.topology.io import atomic_write
+
+    old = os.umask(0o022)
+    try:
+        atomic_write(tmp_path / "out.bin", b"x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "out.bin").stat().st_mode) == 0o644
+    assert [p.name for p in tmp_path.iterdir()] == ["out.bin"]

@@ -20,6 +20,7 @@ from pathlib import Path
 import sumolib
 
 from flyover.errors import FlyoverError
+from flyover.topology.io import file_mode
 
 __all__ = ["NetconvertResult", "NetconvertError", "netconvert_command", "run_netconvert"]
 
@@ -72,6 +73,7 @@ def run_netconvert(xodr: str | os.PathLike, net: str | os.PathLike, timeout_s: f
     warnings = tuple(ln.strip() for ln in lines if ln.strip().startswith("Warning"))
     ok = proc.returncode == 0 and not errors and Path(tmp).stat().st_size > 0
     if ok:
+        os.chmod(tmp, file_mode())
         os.replace(tmp, net)
     else:
         Path(tmp).unlink(missing_ok=True)

@@ -53,6 +53,17 @@ TOPOLOGY_SUFFIXES = (".graphml", ".yaml", ".yml", ".osm")
 _SIDE_WORDS = {"right": "right", "left": "left", "straight": "middle", "middle": "middle"}
 
 
+def file_mode() -> int:
+    """The mode a newly created file gets under the current umask (``0o666 & ~umask``).
+
+    Temporary files (:func:`tempfile.mkstemp`) are private (``0o600``); results
+    renamed from them get this mode instead, like any file the user creates.
+    """
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` via a temporary file and rename (never half-written)."""
     path = Path(path)
@@ -61,6 +72,7 @@ def atomic_write(path: str | os.PathLike, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
+        os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
