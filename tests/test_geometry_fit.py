@@ -109,3 +109,35 @@ def test_vectorized_and_plain_de_reach_the_same_tolerance():
 
 def test_heading_vec_is_unit():
     assert np.allclose(np.linalg.norm(heading_vec(np.linspace(0, 7, 9)), axis=-1), 1.0)
+
+
+def test_evolve_is_seeded_stays_in_bounds_and_finds_the_minimum():
+    from flyover.geometry.fit import evolve
+
+    seen = []
+
+    def f(x):  # shifted sphere with a ridge; x is (D, P)
+        seen.append(x.copy())
+        return ((x - 0.3) ** 2).sum(0) + np.abs(x[0] - x[1])
+
+    bounds = [(-1.0, 1.0)] * 5
+    a = evolve(f, bounds, 8, 300, seed=11)
+    b = evolve(f, bounds, 8, 300, seed=11)
+    c = evolve(f, bounds, 8, 300, seed=12)
+    assert np.array_equal(a.x, b.x) and a.evaluations == b.evaluations
+    assert not np.array_equal(a.x, c.x)
+    assert a.fun < 1e-8 and np.allclose(a.x, 0.3, atol=1e-4)
+    allx = np.concatenate(seen, axis=1)
+    assert allx.min() >= -1.0 and allx.max() <= 1.0
+
+
+def test_evolve_stops_on_request_and_returns_the_chosen_candidate():
+    from flyover.geometry.fit import evolve
+
+    def stop(pop, energy, gen):
+        return int(np.argmax(energy)) if gen == 3 else None  # pick the worst, on purpose
+
+    r = evolve(lambda x: (x**2).sum(0), [(-1.0, 1.0)] * 3, 5, 100, seed=1, stop=stop,
+               init=np.zeros((1, 3)))
+    assert r.generations == 3
+    assert r.fun > 0.0  # the zero vector given as init is the best, but not the one chosen
