@@ -10,7 +10,7 @@ from lxml import etree
 
 from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import read_xodr
-from flyover.opendrive.samples import SAMPLES, sample_geometry
+from flyover.opendrive.samples import SAMPLES, detached_ramp, sample_geometry
 from flyover.opendrive.validate import movements, xsd_errors
 from flyover.opendrive.writer import ExportError, ExportOptions, xodr_bytes
 
@@ -186,15 +186,8 @@ def test_header_has_bounds_and_documents_the_frame(xodrs):
 
 
 def test_ramp_far_from_its_attachment_is_rejected_naming_it():
-    g = sample_geometry("loop")
-    ramp = g.ramps[0]
-    moved = type(ramp.start)(ramp.start.parent, ramp.start.label, ramp.start.s_m + 30.0,
-                             ramp.start.offset_m, ramp.start.heading_rad, ramp.start.z_m)
-    g2 = type(g)(g.class_id, g.sample, g.seed, g.lane_width_m, g.shoulder_width_m,
-                 g.ramp_lane_width_m, g.levels_m, g.roads,
-                 (type(ramp)(**{**ramp.__dict__, "start": moved}),))
     with pytest.raises(ExportError, match="r1"):
-        xodr_bytes(g2)
+        xodr_bytes(detached_ramp(sample_geometry("loop")))
 
 
 def test_movements_of_the_t_follow_ramps_downstream():

@@ -10,7 +10,7 @@ from flyover.geometry.model import write_geometry
 from flyover.opendrive.pipeline import (PIPELINE_CHECKS, VALIDATION_SCHEMA, collect_validation,
                                         export_interchange, validate_interchange)
 from flyover.opendrive.qc import CheckerIssue, CheckerOutcome, Rendition, bundle_verdict
-from flyover.opendrive.samples import sample_geometry
+from flyover.opendrive.samples import detached_ramp, sample_geometry
 from flyover.opendrive.validate import other_rendition
 from flyover.opendrive.writer import ExportError, ExportOptions, xodr_bytes
 
@@ -99,14 +99,7 @@ def test_no_rendition_of_an_edited_file_nor_without_geometry_nor_of_other_versio
 
 def _unwritable_geometry(path):
     """geometry.json of a loop whose ramp starts 30 m from its attachment (the writer refuses r1)."""
-    g = sample_geometry("loop")
-    ramp = g.ramps[0]
-    moved = type(ramp.start)(ramp.start.parent, ramp.start.label, ramp.start.s_m + 30.0,
-                             ramp.start.offset_m, ramp.start.heading_rad, ramp.start.z_m)
-    g2 = type(g)(g.class_id, g.sample, g.seed, g.lane_width_m, g.shoulder_width_m,
-                 g.ramp_lane_width_m, g.levels_m, g.roads,
-                 (type(ramp)(**{**ramp.__dict__, "start": moved}),))
-    write_geometry(g2, path)
+    write_geometry(detached_ramp(sample_geometry("loop")), path)
     return path
 
 

@@ -20,7 +20,7 @@ from flyover.geometry.model import (Attachment, BezierPiece, ElevationPoly, Inte
                                     RampGeometry, RoadGeometry)
 from flyover.opendrive.curves import BezierChain
 
-__all__ = ["sample_geometry", "SAMPLES"]
+__all__ = ["sample_geometry", "detached_ramp", "SAMPLES"]
 
 SAMPLES = ("loop", "flyover", "t", "fork", "y")
 _K = 4 * (math.sqrt(2) - 1) / 3  # Bézier quarter-circle handle
@@ -118,3 +118,14 @@ def sample_geometry(kind: str) -> InterchangeGeometry:
                    Attachment("A1", "In-R", 800.0, -2 * lw, 0.0, 0.0))
         return InterchangeGeometry("cy", 0, 5, lw, 2.5, rw, (0.0, 6.5), (a1, a2, c1), (r1, r2))
     raise ValueError(f"unknown sample {kind!r} (one of {', '.join(SAMPLES)})")
+
+
+def detached_ramp(g: InterchangeGeometry, shift_m: float = 30.0) -> InterchangeGeometry:
+    """``g`` with its first ramp's start moved ``shift_m`` along its parent: the ramp no
+    longer begins where it attaches (bad input the writer must refuse, naming the ramp)."""
+    ramp = g.ramps[0]
+    st = ramp.start
+    moved = type(st)(st.parent, st.label, st.s_m + shift_m, st.offset_m, st.heading_rad, st.z_m)
+    ramps = (type(ramp)(**{**ramp.__dict__, "start": moved}),) + tuple(g.ramps[1:])
+    return type(g)(g.class_id, g.sample, g.seed, g.lane_width_m, g.shoulder_width_m,
+                   g.ramp_lane_width_m, g.levels_m, g.roads, ramps)
