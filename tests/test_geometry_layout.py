@@ -162,3 +162,51 @@ def test_cloverleaf_has_no_level_plan():
     b = _Builder(t, {r: 2 for r in t.roads}, {r: RampFeatures(150.0, 4.0) for r in t.ramps},
                  LayoutSettings(), 1)
     assert b.plan == {}
+
+
+def _plan_turn(ramp) -> float:
+    s = sample_spline(np.array([p.p for p in ramp.plan]), 400)
+    return float(np.diff(np.unwrap(np.arctan2(s.tangent[:, 1], s.tangent[:, 0]))).sum())
+
+
+@pytest.fixture(scope="module")
+def cloverleaf_cd():
+    t = catalog_topologies()["cloverleaf_cd"]
+    # the C-D roads are level (slope 0) and here straight; a small radius would make them wiggle
+    feats = {r: RampFeatures(math.inf, 0.0) if r.startswith("c") else RampFeatures(150.0, 4.0)
+             for r in t.ramps}
+    return t, build_interchange(t, {r: 3 for r in t.roads}, feats, class_id="c0", sample=0,
+                                seed=2)
+
+
+def test_loops_on_collector_distributor_roads_turn_270_degrees_right(cloverleaf_cd):
+    _, ic = cloverleaf_cd
+    for rid in ("lA1", "lA2", "lB1", "lB2"):
+        assert _plan_turn(ic.geometry.ramp(rid)) == pytest.approx(-1.5 * np.pi, abs=0.35), rid
+
+
+def test_loop_movement_comes_from_the_roads_not_the_wiggling_parents():
+    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(30.0 if r.startswith("c") else 150.0, 4.0) for r in t.ramps}
+    b = _Builder(t, {r: 3 for r in t.roads}, feats, LayoutSettings(), 1)
+    for k, ramp in enumerate(b.order()):
+        spec = b.spec(ramp, feats[ramp])
+        if ramp.startswith("l"):
+            # whatever the C-D roads' local headings, a loop turns right by about 270°
+            assert -2 * np.pi < spec.turn_rad < -np.pi, (ramp, spec.turn_rad)
+            assert spec.pieces == 2
+        elif ramp.startswith("o"):
+            assert -np.pi < spec.turn_rad < np.pi / 2, (ramp, spec.turn_rad)
+        if ramp.startswith("c"):  # record a quick fit so that the loops have parents
+            from flyover.geometry.fit import fit_ramp  # noqa: PLC0415
+
+            b.record(ramp, fit_ramp(spec, b.obstacles(), b.st.fit, seed=k))
+
+
+def test_cloverleaf_with_cd_roads_builds_every_ramp_within_targets(cloverleaf_cd):
+    _, ic = cloverleaf_cd
+    for o in ic.outcomes:
+        assert o.fit.conflicts == 0, o.ramp
+        assert o.first_try_ok, (o.ramp, o.fit.min_radius_m, o.fit.max_slope_pct)

@@ -19,7 +19,10 @@ Layout
   ``pos`` (attachments placed later keep ``gap_m`` from earlier ones).
 * A loop is a left movement that leaves a road on its right (``Out-R``) and
   does not end straight on (``In-M``), unless its exit ``pos`` is below 0.4
-  (then it is a semi-directional flyover); it turns 270° to the right.
+  (then it is a semi-directional flyover); it turns 270° to the right. The
+  movement is that of the roads the ramp's chain connects; a ramp attached
+  to other ramps (e.g. a loop on collector-distributor roads) turns by the
+  parents' local heading difference on the branch nearest that movement.
 * A stub ramp with no end (it splits into other ramps) or no start (formed
   by merging ramps) gets a free end; it climbs a third of the height between
   its road and its children's roads, so every ramp of a chain climbs.
@@ -283,7 +286,7 @@ class _Builder:
             if start is None or end is None or not a or not b:
                 continue
             raw = _wrap(self.roads[b].heading - self.roads[a].heading)
-            if raw > 1.0 and not self._is_loop(ramp, raw):
+            if raw > 1.0 and not self._is_loop(ramp):
                 k = min(self.roads[a].level, len(levels) - 1)
                 plan[ramp] = float(levels[k])
         return plan
@@ -331,13 +334,26 @@ class _Builder:
         st = self.rails[node]
         return float(np.interp(s, st["s"], st["heading"]))
 
-    def _is_loop(self, ramp: str, raw: float) -> bool:
+    def _movement(self, ramp: str) -> float | None:
+        """The turn between the roads the ramp's chain connects (``None`` if unknown)."""
+        a, b = _road_of(self.topo, ramp, False), _road_of(self.topo, ramp, True)
+        if not a or not b:
+            return None
+        return float(_wrap(self.roads[b].heading - self.roads[a].heading))
+
+    def _is_loop(self, ramp: str) -> bool:
+        """A left movement between the roads, leaving its parent on the right (see module doc).
+
+        Decided from the roads the chain connects, not from the parents' local
+        headings: a collector-distributor road with a small radius wiggles.
+        """
         start, end = _ends(self.topo, ramp)
         if start is None or end is None:
             return False
         if start[1] is not Label.OUT_R or end[1] is Label.IN_M:
             return False
-        if not (abs(raw - np.pi / 2) < 0.2):
+        raw = self._movement(ramp)
+        if raw is None or not (abs(raw - np.pi / 2) < 0.2):
             return False
         pos = self.g.edges[start[0], ramp].get("pos")
         return pos is None or pos >= 0.4
@@ -446,12 +462,17 @@ class _Builder:
                 stub_extra += 250.0
         else:
             raw = _wrap(h_b - h_a)
-            loop = self._is_loop(ramp, raw)
-        turn = raw - 2 * np.pi if loop else raw
+            loop = self._is_loop(ramp)
+            mov = self._movement(ramp)
+            if mov is not None:  # the branch of the local turn nearest the roads' movement
+                if loop:
+                    mov -= 2 * np.pi
+                raw = mov + _wrap(raw - mov)
+        turn = raw
         pieces = 2 if (abs(turn) > 2.2 or abs(turn) < 0.3) else 1
         # a direct left turn crosses the other roads: leave room to climb / descend a level
         extra = stub_extra if free is not None else 0.0
-        if start is not None and end is not None and not loop and raw > 1.0:
+        if start is not None and end is not None and not loop and turn > 1.0:
             g = max(feat.slope_pct, 0.5) / 100.0
             extra = st.level_height_m / g + st.fit.transition_m
         a = self._rail(ramp, start, True, loop, width, extra) if start else None
@@ -468,10 +489,11 @@ class _Builder:
             return self.roads[node].heading
         st = self.rails[node]
         p_start, p_end = _ends(self.topo, node)
+        pos = self.g.edges[(node, self._current) if is_start else (self._current, node)].get("pos")
         if is_start:
-            s = st["s"][-1] if p_end is None else 0.4 * st["s"][-1]
+            s = st["s"][-1] if p_end is None else (0.4 if pos is None else pos) * st["s"][-1]
         else:
-            s = 0.0 if p_start is None else 0.6 * st["s"][-1]
+            s = 0.0 if p_start is None else (0.6 if pos is None else pos) * st["s"][-1]
         return float(np.interp(s, st["s"], st["heading"]))
 
     def _end_z(self, end) -> float:
