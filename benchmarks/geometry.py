@@ -21,6 +21,7 @@ import argparse
 import os
 import time
 from dataclasses import replace
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -32,6 +33,7 @@ from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
 from flyover.geometry.tables import (  # noqa: E402
     build_sample, domain_resampler, geometry_rows, read_feature_sets, sample_seed, summary,
+    write_sample,
 )
 from flyover.topology.canonical import class_id as class_id_of  # noqa: E402
 from flyover.topology.catalog import catalog_topologies  # noqa: E402
@@ -63,7 +65,11 @@ def main() -> None:
     ap.add_argument("--designs", nargs="*", default=None)
     ap.add_argument("--plain-ramps", type=int, default=12,
                     help="ramps re-fitted alone with each DE engine for comparison (0: skip)")
-    ap.add_argument("--from-results", action="store_true")
+    ap.add_argument("--from-results", action="store_true",
+                    help="the workflow's feature sets (results/features/), all of them with "
+                         "--samples 0")
+    ap.add_argument("--keep", type=Path, metavar="DIR",
+                    help="write DIR/{class_id}/{sample}/geometry.json (as the workflow does)")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
     settings = LayoutSettings.from_config(cfg["geometry"])
@@ -79,12 +85,15 @@ def main() -> None:
             sets = read_feature_sets(f"results/features/{cid}.parquet")
         else:
             sets = drawn_feature_sets(topo, profile, args.samples, seed)
-        for sample, fs in sorted(sets.items())[: args.samples]:
+        for sample, fs in sorted(sets.items())[: args.samples or None]:
             t0 = time.process_time()
             ic = build_sample(topo, fs, class_id=cid, sample=sample, seed=seed, settings=settings,
                               resampler=domain_resampler(sets, sample_seed(seed, cid, sample)))
             per_ic.append(time.process_time() - t0)
             rows += geometry_rows(ic)
+            if args.keep:
+                out = args.keep / cid / str(sample)
+                write_sample(ic, out / "geometry.json", out / "geometry.parquet")
             fits += [o.fit for o in ic.outcomes]
             print(f"{name} sample {sample}: {sum(o.fit.ok for o in ic.outcomes)}/"
                   f"{len(ic.outcomes)} ramps ok, {per_ic[-1]:.2f} s", flush=True)
