@@ -210,3 +210,62 @@ def test_cloverleaf_with_cd_roads_builds_every_ramp_within_targets(cloverleaf_cd
     for o in ic.outcomes:
         assert o.fit.conflicts == 0, o.ramp
         assert o.first_try_ok, (o.ramp, o.fit.min_radius_m, o.fit.max_slope_pct)
+
+
+def _builder(name, radius=150.0, slope=4.0, lanes=3):
+    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+
+    t = catalog_topologies()[name]
+    feats = {r: RampFeatures(radius, slope) for r in t.ramps}
+    return _Builder(t, {r: lanes for r in t.roads}, feats, LayoutSettings(), 1), feats
+
+
+@pytest.mark.parametrize("name", ["directional_t", "semidirectional_t"])
+def test_t_level_plan_puts_the_two_crossing_left_turns_one_level_apart(name):
+    b, _ = _builder(name)
+    clear = b.st.fit.clearance_m
+    assert set(b.plan) == {"rA2", "rL"}  # the left turns; right turns have no plan
+    through = max(b.roads[r].z for r in ("A1", "A2"))
+    assert min(b.plan.values()) >= through + clear
+    # rL (leaving the terminating expressway) passes over rA2
+    assert b.plan["rL"] >= b.plan["rA2"] + clear
+
+
+def test_trumpet_loop_is_a_loop_and_the_other_left_turn_needs_no_second_level():
+    b, feats = _builder("trumpet")
+    assert b._is_loop("loop")
+    assert b.plan == {"rL": b.st.levels_m[1]}  # over the through road only
+    assert b.spec("loop", feats["loop"]).turn_rad == pytest.approx(-1.5 * np.pi)
+
+
+def test_median_is_widened_where_ramps_run_in_it():
+    b, _ = _builder("directional_t")
+    st = b.st
+    # rA2 leaves A2 and rL joins it on the left: A's median holds a ramp lane and shoulder
+    for r in ("A1", "A2"):
+        assert np.hypot(*b.roads[r].origin) == pytest.approx(
+            st.median_m / 2 + st.ramp_lane_width_m + st.shoulder_width_m)
+    for r in ("B1", "B2"):
+        assert np.hypot(*b.roads[r].origin) == pytest.approx(st.median_m / 2)
+
+
+def test_directional_t_builds_every_ramp_on_the_first_try_without_conflicts():
+    _, ic = _build("directional_t")
+    for o in ic.outcomes:
+        assert o.fit.conflicts == 0, o.ramp
+        assert o.first_try_ok, (o.ramp, o.fit.min_radius_m, o.fit.max_slope_pct)
+    # rL passes over rA2: its profile reaches the level above the terminating road
+    rl = ic.geometry.ramp("rL")
+    z, _ = evaluate_polys(rl.elevation, np.linspace(0.0, rl.length_m, 200))
+    assert z.max() >= 13.0 - 1e-6
+
+
+def test_stack_stubs_end_under_the_flyovers_so_right_turns_pass_below():
+    b, feats = _builder("stack4")
+    low = min(b.plan.values())
+    for stub in ("eA1", "eA2", "eB1", "eB2"):
+        spec = b.spec(stub, feats[stub])
+        z_road = b.roads[stub.replace("e", "")].z
+        assert z_road < spec.free.z <= low - b.st.fit.clearance_m, stub
+        # it attaches just beyond the room its children need, not anywhere up to reach_m
+        assert spec.start.hi - spec.start.lo == pytest.approx(b.st.stub_window_m)

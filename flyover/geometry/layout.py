@@ -11,27 +11,47 @@ Layout
   the side the topology implies. Each expressway is on its own level
   (0, 1, ...), the terminating one of a T above the through one.
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
-  from the axis.
+  from the axis; where ramps leave or join a carriageway on its left (they run
+  in the median) the median is wider by two ramp lanes and shoulders.
 * Ramps attach along their parents; *which side of the centre* follows from
   the movement (right turns and direct left turns exit before the crossing and
   merge after it; loops do the opposite; stubs that split exit before, those
   that merge join after), and the order of attachments on one parent follows
-  ``pos`` (attachments placed later keep ``gap_m`` from earlier ones).
-* A loop is a left movement that leaves a road on its right (``Out-R``) and
-  does not end straight on (``In-M``), unless its exit ``pos`` is below 0.4
-  (then it is a semi-directional flyover); it turns 270° to the right. The
-  movement is that of the roads the ramp's chain connects; a ramp attached
-  to other ramps (e.g. a loop on collector-distributor roads) turns by the
-  parents' local heading difference on the branch nearest that movement.
+  ``pos`` (attachments placed later keep ``gap_m`` from earlier ones, from the
+  whole length a stub runs along the road or a loop reaches along it). A ramp
+  joining a road after a loop leaves it, and not coming from the road the
+  loop goes to (it cannot go round the loop, as a cloverleaf's outer
+  connector does: a trumpet), passes over the loop's exit branch and keeps
+  room after it to descend. A ramp leaving (joining) a loop does so before
+  (after) the loop turns.
+* The movement of a ramp is that of the roads its chain connects. A loop is
+  a left movement that leaves its parent on the right (``Out-R``), unless its
+  exit ``pos`` is below 0.4 (then it is a semi-directional flyover); it turns
+  270° to the right. A ramp attached to other ramps (e.g. a loop on
+  collector-distributor roads) turns by the parents' local heading
+  difference, on the branch nearest that movement. Direct left turns are
+  splines of three pieces (climb along the road, turn, descend along it),
+  loops and straight-on ramps of two, other ramps one.
 * A stub ramp with no end (it splits into other ramps) or no start (formed
   by merging ramps) gets a free end; it climbs a third of the height between
-  its road and its children's roads, so every ramp of a chain climbs.
-* Level plan (fixed up front, four-leg designs): a direct left turn crosses
-  both expressways, so its crest is the lowest level ``clearance_m`` above the
-  highest road; left turns leaving the second expressway go one level higher
-  (they cross those of the first: a four-level stack). A stub feeding or fed
-  by such a ramp ends ``clearance_m`` from its road toward that crest and
-  attaches far enough out for the ramp to climb before the crossing.
+  its road and its children's roads, so every ramp of a chain climbs, over a
+  free end far enough out to reach that height at its slope. It attaches
+  within ``stub_window_m`` beyond the room it leaves toward the crossing: for
+  its planned children to climb to their crest, for its turning children to
+  turn at their radius.
+* Level plan (fixed up front): a direct left turn crosses the through
+  expressways, so its crest is the lowest level ``clearance_m`` above the
+  highest of them. Where left turns run both ways between two expressways
+  they cross each other: those leaving the second expressway (a T's
+  terminating one) go one level higher — the two flyover levels of a
+  four-level stack, the three levels of a directional T. A stub feeding or
+  fed by such a ramp ends ``clearance_m`` from its road toward that crest,
+  but no higher than ``clearance_m`` (and 0.5 m) under the lowest planned crest, so
+  that its other children (right turns) pass under every flyover; a planned
+  ramp's road ends, and those of a ramp it leaves or joins, keep room from
+  the crossing to climb to (descend from) the crest at the ramp's slope.
+* Ramps are fitted parents first; in one round, a low connector between two
+  ramps (a stack's right turn, fixed at both ends) before the flyovers.
 
 Ramps are fitted one by one (parents first) by :func:`flyover.geometry.fit.fit_ramp`,
 avoiding same-level conflicts with roads and the ramps already fitted; a ramp
@@ -54,13 +74,16 @@ from flyover.geometry.fit import FitSettings, FreeEnd, Obstacles, Rail, RampFit,
 from flyover.geometry.model import (
     Attachment, InterchangeGeometry, RampGeometry, RoadGeometry,
 )
-from flyover.geometry.profile import evaluate_polys
+from flyover.geometry.profile import climb_distance, evaluate_polys
 from flyover.topology.model import Kind, Label, Topology
 
 __all__ = ["GeometryError", "LayoutSettings", "RampFeatures", "RampOutcome", "Interchange",
            "build_interchange"]
 
 log = logging.getLogger(__name__)
+
+
+_Z_MARGIN = 0.5  # m kept beyond the clearance where levels are planned
 
 
 class GeometryError(FlyoverError):
@@ -84,6 +107,7 @@ class LayoutSettings:
     terminal_m: float = 120.0
     road_margin_m: float = 100.0
     cd_clear_m: float = 350.0
+    stub_window_m: float = 200.0
     max_resamples: int = 3
     restarts: int = 1
     fit: FitSettings = field(default_factory=FitSettings)
@@ -196,7 +220,13 @@ def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     exps = topo.expressways
     terminal = {e: any(_terminal(topo, r) for r in rs) for e, rs in exps.items()}
     order = sorted(exps, key=lambda e: (terminal[e], e))
-    half = {e: st.median_m / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
+    g = topo.graph
+    # ramps leaving or joining a carriageway on its left run in the median: widen it
+    left = {e: any(d["label"] in (Label.OUT_L, Label.IN_L) and (u in rs or v in rs)
+                   for u, v, d in g.edges(data=True)) for e, rs in exps.items()}
+    median = {e: st.median_m + (2 * (st.ramp_lane_width_m + st.shoulder_width_m) if left[e] else 0.0)
+              for e in exps}
+    half = {e: median[e] / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
             + st.shoulder_width_m for e, rs in exps.items()}
 
     def place(options: dict[str, float]) -> dict[str, _Road]:
@@ -206,7 +236,7 @@ def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             h1 = options[e]
             for i, r in enumerate(rs):
                 h = h1 if i == 0 else h1 + np.pi
-                o = (st.median_m / 2) * np.array([np.sin(h), -np.cos(h)])
+                o = (median[e] / 2) * np.array([np.sin(h), -np.cos(h)])
                 other = max([half[x] for x in exps if x != e] or [0.0])
                 term = _terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
@@ -260,26 +290,28 @@ class _Builder:
         self.g = topo.graph
         self.fits: dict[str, RampFit] = {}
         self.rails: dict[str, dict] = {}  # fitted ramp → stations
-        self.attached: dict[str, list[tuple[float, float]]] = {}  # parent → (pos, t)
+        # parent road → (pos, extent along the road) of the ramps attached to it
+        self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.plan = self._level_plan()
 
     def _level_plan(self) -> dict[str, float]:
-        """Crest heights fixed up front: direct left turns of a four-leg design.
+        """Crest heights fixed up front: the direct left turns.
 
-        A direct left turn crosses both expressways, so it passes over the
-        higher one by the clearance; the left turns leaving the second
-        expressway go one level higher still (they cross those of the first):
-        the two flyover levels of a four-level stack.
+        A direct left turn crosses the through expressways, so it passes over
+        the highest of them by the clearance. Where left turns run both ways
+        between two expressways they cross each other: those leaving the
+        second expressway (a T's terminating one) go one level higher. Four
+        legs: the two flyover levels of a four-level stack; a T: the three
+        levels of a directional T.
         """
         topo, st = self.topo, self.st
-        if any(np.isfinite(r.t_lo) or np.isfinite(r.t_hi) for r in self.roads.values()):
-            return {}  # a T: levels are found by lifting
-        top = max(r.z for r in self.roads.values())
+        through = [r for r in self.roads.values() if np.isinf(r.t_lo) and np.isinf(r.t_hi)]
+        top = max(r.z for r in through or self.roads.values())
         levels = [z for z in st.levels_m if z >= top + st.fit.clearance_m - 1e-6]
         if not levels:
             return {}
-        plan = {}
+        lefts = {}
         for ramp in topo.ramps:
             start, end = _ends(topo, ramp)
             a, b = _road_of(topo, ramp, False), _road_of(topo, ramp, True)
@@ -287,8 +319,12 @@ class _Builder:
                 continue
             raw = _wrap(self.roads[b].heading - self.roads[a].heading)
             if raw > 1.0 and not self._is_loop(ramp):
-                k = min(self.roads[a].level, len(levels) - 1)
-                plan[ramp] = float(levels[k])
+                lefts[ramp] = (self.roads[a].expressway, self.roads[b].expressway)
+        plan = {}
+        for ramp, (ea, eb) in lefts.items():
+            both_ways = (eb, ea) in lefts.values()
+            k = self.roads[_road_of(topo, ramp, False)].level if both_ways else 0
+            plan[ramp] = float(levels[min(k, len(levels) - 1)])
         return plan
 
     def _stub_kids(self, ramp: str) -> list[str]:
@@ -298,21 +334,33 @@ class _Builder:
 
     def _stub_z(self, ramp: str, z_road: float, zf: float) -> float:
         """Height of a stub's free end: the clearance toward its planned children's crest
-        (so that they clear the roads near the stub), else ``zf``."""
+        (so that they clear the roads near the stub), but no higher than the clearance
+        (and a margin) under the lowest planned crest, so that its unplanned children
+        (right turns) pass under every flyover; else ``zf``."""
         crests = [self.plan[k] for k in self._stub_kids(ramp) if k in self.plan]
         if not crests:
             return zf
         c = max(crests)
-        return float(min(c, z_road + self.st.fit.clearance_m)) if c > z_road else zf
+        if c <= z_road:
+            return zf
+        clear = self.st.fit.clearance_m
+        z = min(c, z_road + clear, min(self.plan.values()) - clear - _Z_MARGIN)
+        return float(z) if z > z_road + 0.25 else float(min(c, z_road + clear))
 
-    def _stub_extra(self, ramp: str, zf: float) -> float:
-        """Room a stub leaves so that its planned children can climb to their crest."""
-        kids = self._stub_kids(ramp)
+    def _kids_room(self, kids: list[str], z: float, turning: bool = True) -> float:
+        """Room a ramp leaves toward the crossing for the ramps leaving or joining it
+        (``kids``, at height ``z``): for the planned ones to climb to their crest, and
+        (``turning``) for the turning ones to turn at their radius."""
         extra = 0.0
         for k in kids:
-            if k in self.plan and k in self.features:
+            if k not in self.features:
+                continue
+            if k in self.plan:
                 gk = max(self.features[k].slope_pct, 0.5) / 100.0
-                extra = max(extra, abs(self.plan[k] - zf) / gk + self.st.fit.transition_m)
+                extra = max(extra, abs(self.plan[k] - z) / gk + self.st.fit.transition_m)
+            mov = self._movement(k)
+            if turning and mov is not None and abs(mov) > 1.0:
+                extra = max(extra, min(self.features[k].radius_m, self.st.fit.inf_reference_m))
         return extra
 
     def _lanes(self, ramp: str) -> int:
@@ -350,7 +398,7 @@ class _Builder:
         start, end = _ends(self.topo, ramp)
         if start is None or end is None:
             return False
-        if start[1] is not Label.OUT_R or end[1] is Label.IN_M:
+        if start[1] is not Label.OUT_R:
             return False
         raw = self._movement(ramp)
         if raw is None or not (abs(raw - np.pi / 2) < 0.2):
@@ -378,19 +426,46 @@ class _Builder:
             lo = hi = r.t_lo
         else:
             before = is_start != loop
-            lo, hi = (-st.reach_m, -tz) if before else (tz, st.reach_m)
+            reach = max(st.reach_m, tz + st.gap_m)
+            if self._is_stub(ramp):  # a stub attaches just beyond the room it leaves
+                reach = tz + st.stub_window_m
+            lo, hi = (-reach, -tz) if before else (tz, reach)
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
             if pos is not None:
-                for p, t in self.attached.get(road, []):
+                for p, t_min, t_max, other, t_other in self.attached.get(road, []):
                     if p < pos:
-                        lo = max(lo, t + st.gap_m)
+                        lo = max(lo, t_max + st.gap_m)
+                        if self._crosses_loop_exit(ramp, other, road):
+                            # it passes over the loop's exit branch, then descends
+                            g = max(self._feat.slope_pct, 0.5) / 100.0
+                            lo = max(lo, t_other + st.fit.clearance_m / g
+                                     + st.fit.transition_m + st.gap_m)
                     elif p > pos:
-                        hi = min(hi, t - st.gap_m)
-            if lo > hi - 1.0:
-                lo, hi = (-st.reach_m, -tz) if before else (tz, st.reach_m)
+                        hi = min(hi, t_min - st.gap_m)
+            if lo > hi - 1.0:  # no room left between the others: keep the side's order
+                lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
+
+    def _low_connector(self, ramp: str) -> bool:
+        """A ramp between two other ramps, without a planned crest."""
+        ends = _ends(self.topo, ramp)
+        return ramp not in self.plan and all(e is not None and e[0] not in self.roads
+                                             for e in ends)
+
+    def _crosses_loop_exit(self, ramp: str, other: str, road: str) -> bool:
+        """Whether ``ramp``, joining ``road`` after the loop ``other`` leaves it, has to pass
+        over the loop's exit branch: it does unless it comes from the road the loop goes
+        to (then it goes round the loop, as a cloverleaf's outer connector)."""
+        start, end = _ends(self.topo, ramp)
+        if not self._is_loop(other) or end is None or end[0] != road:
+            return False
+        return _road_of(self.topo, ramp, False) != _road_of(self.topo, other, True)
+
+    def _is_stub(self, ramp: str) -> bool:
+        start, end = _ends(self.topo, ramp)
+        return start is None or end is None
 
     def _same_road(self, ramp: str) -> bool:
         start, end = _ends(self.topo, ramp)
@@ -414,6 +489,18 @@ class _Builder:
             pos = self.g.edges[key].get("pos")
             if pos is not None:
                 lo, hi = max(0.05, pos - 0.15) * length, min(0.95, pos + 0.15) * length
+            elif self._is_loop(parent):  # leave a loop before it turns, join it after
+                head = st["heading"]
+                if is_start:
+                    turned = np.abs(head - head[0]) > 0.35
+                    lo, hi = 0.05 * length, float(st["s"][np.argmax(turned)]) if turned.any() \
+                        else 0.6 * length
+                else:
+                    turned = np.abs(head - head[-1]) > 0.35
+                    last = len(head) - 1 - np.argmax(turned[::-1])
+                    lo = float(st["s"][last]) if turned.any() else 0.4 * length
+                    hi = 0.95 * length
+                lo, hi = min(lo, hi), max(lo, hi)
             elif is_start:
                 lo, hi = 0.15 * length, 0.6 * length
             else:
@@ -432,7 +519,7 @@ class _Builder:
         return float(np.mean(zs)) if zs else 0.0
 
     def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
-        self._current = ramp
+        self._current, self._feat = ramp, feat
         start, end = _ends(self.topo, ramp)
         width = self.width[ramp]
         st = self.st
@@ -455,11 +542,15 @@ class _Builder:
             else:
                 z1 = self._end_z(end)
                 zf = self._stub_z(ramp, z1, z1 + (self._goal_z(ramp, False) - z1) / 3.0)
-            free = FreeEnd((60.0, 400.0), lat, (-np.pi / 4, np.pi / 4), zf)
-            stub_extra = self._stub_extra(ramp, zf)
+            # the free end is far enough out for the stub to climb to it at its slope
+            z_fix = self._end_z(start or end)
+            g = max(feat.slope_pct, 0.5) / 100.0
+            climb = float(climb_distance(zf - z_fix, g, st.fit.transition_m)) + 60.0
+            free = FreeEnd((60.0, max(400.0, climb)), lat, (-np.pi / 4, np.pi / 4), zf)
+            stub_extra = self._kids_room(self._stub_kids(ramp), zf)
             if stub_extra > 0:  # the free end keeps that room from the crossing
-                free = replace(free, forward=(60.0, 250.0))
-                stub_extra += 250.0
+                free = replace(free, forward=(60.0, max(250.0, climb)))
+                stub_extra += free.forward[1]
         else:
             raw = _wrap(h_b - h_a)
             loop = self._is_loop(ramp)
@@ -470,13 +561,27 @@ class _Builder:
                 raw = mov + _wrap(raw - mov)
         turn = raw
         pieces = 2 if (abs(turn) > 2.2 or abs(turn) < 0.3) else 1
+        if start is not None and end is not None and not loop and turn > 1.0:
+            pieces = 3  # a left turn over the roads: climb along its road, turn, descend along
         # a direct left turn crosses the other roads: leave room to climb / descend a level
         extra = stub_extra if free is not None else 0.0
+        extra_b = extra
         if start is not None and end is not None and not loop and turn > 1.0:
             g = max(feat.slope_pct, 0.5) / 100.0
-            extra = st.level_height_m / g + st.fit.transition_m
+            crest = self.plan.get(ramp)
+            if crest is not None:  # the whole climb before the crossing, descent after
+                extra, extra_b = (max(st.level_height_m, crest - self._end_z(e)) / g
+                                  + st.fit.transition_m for e in (start, end))
+            else:
+                extra = extra_b = st.level_height_m / g + st.fit.transition_m
+        if free is None:  # room for the planned ramps leaving / joining this one
+            g_ = self.g
+            outs = [v for _, v, d in g_.out_edges(ramp, data=True) if d["label"].is_out]
+            ins = [u for u, _, d in g_.in_edges(ramp, data=True) if not d["label"].is_out]
+            extra = max(extra, self._kids_room(outs, self._end_z(start), turning=False))
+            extra_b = max(extra_b, self._kids_room(ins, self._end_z(end), turning=False))
         a = self._rail(ramp, start, True, loop, width, extra) if start else None
-        b = self._rail(ramp, end, False, loop, width, extra) if end else None
+        b = self._rail(ramp, end, False, loop, width, extra_b) if end else None
         z_a = self._end_z(start) if start else free.z
         z_b = self._end_z(end) if end else free.z
         crest = self.plan.get(ramp)
@@ -549,7 +654,15 @@ class _Builder:
             key = (end.parent, ramp) if is_start else (ramp, end.parent)
             pos = self.g.edges[key].get("pos")
             if pos is not None:
-                self.attached.setdefault(end.parent, []).append((pos, t))
+                # a stub runs along its road up to its free end, a loop's circle reaches
+                # along it: the next attachments keep their gap from all of it
+                road = self.roads[end.parent]
+                d = np.array([math.cos(road.heading), math.sin(road.heading)])
+                along = (xy - np.array(road.origin)) @ d \
+                    if fit.spec.free is not None or self._is_loop(ramp) else [t]
+                self.attached.setdefault(end.parent, []).append(
+                    (pos, float(min(t, np.min(along))), float(max(t, np.max(along))), ramp,
+                     float(t)))
 
     def order(self) -> list[str]:
         done: set[str] = set()
@@ -565,8 +678,10 @@ class _Builder:
             if not ready:
                 raise GeometryError("ramps attach to each other in a cycle", source=self.topo.source,
                                     element=", ".join(todo))
-            # stubs and road-to-road ramps first, in id order
-            for r in ready:
+            # stubs and road-to-road ramps first, in id order; in a round, a low connector
+            # between two ramps (e.g. a stack's right turn: no freedom where it attaches)
+            # goes before the flyovers, which then pass over it
+            for r in sorted(ready, key=lambda r: not self._low_connector(r)):
                 done.add(r)
                 out.append(r)
                 todo.remove(r)
