@@ -172,6 +172,7 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
                     ss[j] = off
         length[p] = off
         mean = 0.0
+        prev = np.arctan2(ty[0], tx[0])
         for j in range(n):
             kj = kap[j]
             mean += kj
@@ -180,8 +181,9 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
             if r < rmin[p]:
                 rmin[p] = r
             if j > 0:
-                da = np.arctan2(ty[j], tx[j]) - np.arctan2(ty[j - 1], tx[j - 1])
-                turn[p] += (da + np.pi) % (2 * np.pi) - np.pi
+                ang = np.arctan2(ty[j], tx[j])
+                turn[p] += (ang - prev + np.pi) % (2 * np.pi) - np.pi
+                prev = ang
         mean /= n
         k2[p] /= n
         kvar[p] = k2[p] - mean * mean
