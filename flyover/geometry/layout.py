@@ -18,11 +18,12 @@ Layout
   merge after it; loops do the opposite; stubs that split exit before, those
   that merge join after), and the order of attachments on one parent follows
   ``pos`` (attachments placed later keep ``gap_m`` from earlier ones, from the
-  whole length a stub runs along the road or a loop reaches along it). A ramp
-  joining a road after a loop leaves it, and not coming from the road the
-  loop goes to (it cannot go round the loop, as a cloverleaf's outer
-  connector does: a trumpet), passes over the loop's exit branch and keeps
-  room after it to descend. A ramp leaving (joining) a loop does so before
+  whole length a stub runs along the road or a loop reaches along it). A
+  cloverleaf's outer connector, which goes round the loop joining the same
+  two roads, attaches where an arc of its target radius clears every point
+  of the loop. A ramp joining a road after a loop leaves it, and not coming
+  from the road the loop goes to (it cannot go round the loop: a trumpet),
+  passes over the loop's exit branch and keeps room after it to descend. A ramp leaving (joining) a loop does so before
   (after) the loop turns.
 * The movement of a ramp is that of the roads its chain connects. A loop is
   a left movement that leaves its parent on the right (``Out-R``), unless its
@@ -433,6 +434,7 @@ class _Builder:
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
             if pos is not None:
                 for p, t_min, t_max, other, t_other in self.attached.get(road, []):
+                    round_loop = self._goes_round_loop(ramp, other, road)
                     if p < pos:
                         lo = max(lo, t_max + st.gap_m)
                         if self._crosses_loop_exit(ramp, other, road):
@@ -440,8 +442,12 @@ class _Builder:
                             g = max(self._feat.slope_pct, 0.5) / 100.0
                             lo = max(lo, t_other + st.fit.clearance_m / g
                                      + st.fit.transition_m + st.gap_m)
+                        if round_loop:
+                            lo = max(lo, self._round_loop(other, road, width, +1))
                     elif p > pos:
                         hi = min(hi, t_min - st.gap_m)
+                        if round_loop:
+                            hi = min(hi, self._round_loop(other, road, width, -1))
             if lo > hi - 1.0:  # no room left between the others: keep the side's order
                 lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
         if hi - lo < 1e-3:
@@ -453,6 +459,33 @@ class _Builder:
         ends = _ends(self.topo, ramp)
         return ramp not in self.plan and all(e is not None and e[0] not in self.roads
                                              for e in ends)
+
+    def _other_road(self, ramp: str, road: str) -> str | None:
+        """The road at the other end of ``ramp``'s chain from ``road``."""
+        start, _ = _ends(self.topo, ramp)
+        return _road_of(self.topo, ramp, start is not None and start[0] == road)
+
+    def _goes_round_loop(self, ramp: str, other: str, road: str) -> bool:
+        """Whether ``ramp`` and the loop ``other``, both on ``road``, join the same two
+        roads the other way round: a cloverleaf's outer connector round its loop."""
+        return self._is_loop(other) and not self._is_loop(ramp) and \
+            self._other_road(ramp, road) == self._other_road(other, road)
+
+    def _round_loop(self, loop: str, road: str, width: float, side: int) -> float:
+        """Where along ``road`` a ramp turning at its target radius must attach to go round
+        the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
+        distance an arc of that radius needs to get as far from the road."""
+        r, st = self.roads[road], self.st
+        d = np.array([math.cos(r.heading), math.sin(r.heading)])
+        rel = self.rails[loop]["centre"] - np.array(r.origin)
+        t = rel @ d
+        lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
+        rad = self._feat.radius_m if math.isfinite(self._feat.radius_m) else \
+            st.fit.inf_reference_m
+        c = width + self.width[loop] / 2 + 1.0
+        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
+                        rad + c)
+        return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
 
     def _crosses_loop_exit(self, ramp: str, other: str, road: str) -> bool:
         """Whether ``ramp``, joining ``road`` after the loop ``other`` leaves it, has to pass
