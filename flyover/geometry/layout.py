@@ -23,8 +23,8 @@ Layout
   two roads, attaches where an arc of its target radius clears every point
   of the loop. A ramp joining a road after a loop leaves it, and not coming
   from the road the loop goes to (it cannot go round the loop: a trumpet),
-  passes over the loop's exit branch and keeps room after it to descend. A ramp leaving (joining) a loop does so before
-  (after) the loop turns.
+  passes over the loop's exit branch and keeps room after it to descend. A
+  ramp leaving (joining) a loop does so before (after) the loop turns.
 * The movement of a ramp is that of the roads its chain connects. A loop is
   a left movement that leaves its parent on the right (``Out-R``), unless its
   exit ``pos`` is below 0.4 (then it is a semi-directional flyover); it turns
@@ -225,8 +225,8 @@ def _layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     # ramps leaving or joining a carriageway on its left run in the median: widen it
     left = {e: any(d["label"] in (Label.OUT_L, Label.IN_L) and (u in rs or v in rs)
                    for u, v, d in g.edges(data=True)) for e, rs in exps.items()}
-    median = {e: st.median_m + (2 * (st.ramp_lane_width_m + st.shoulder_width_m) if left[e] else 0.0)
-              for e in exps}
+    wide = 2 * (st.ramp_lane_width_m + st.shoulder_width_m)
+    median = {e: st.median_m + (wide if left[e] else 0.0) for e in exps}
     half = {e: median[e] / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
             + st.shoulder_width_m for e, rs in exps.items()}
 
