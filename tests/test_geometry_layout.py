@@ -260,15 +260,25 @@ def test_directional_t_builds_every_ramp_within_targets_without_conflicts():
     assert z.max() >= 13.0 - 1e-6
 
 
-def test_stack_stubs_end_under_the_flyovers_so_right_turns_pass_below():
-    b, feats = _builder("stack4")
+def test_turbine_stubs_end_under_the_flyovers_so_right_turns_pass_below():
+    b, feats = _builder("turbine")
     low = min(b.plan.values())
     for stub in ("eA1", "eA2", "eB1", "eB2"):
         spec = b.spec(stub, feats[stub])
         z_road = b.roads[stub.replace("e", "")].z
+        # its right turn goes on to a road, fitted after the flyovers: it must pass under
         assert z_road < spec.free.z <= low - b.st.fit.clearance_m, stub
         # it attaches just beyond the room its children need, not anywhere up to reach_m
         assert spec.start.hi - spec.start.lo == pytest.approx(b.st.stub_window_m)
+
+
+def test_stack_right_turns_between_stubs_go_first_and_stubs_rise_toward_the_flyovers():
+    b, feats = _builder("stack4")
+    order = b.order()
+    for r in ("rA1", "rB1", "rA2", "rB2"):  # low connectors before the flyovers
+        assert all(order.index(r) < order.index(f) for f in ("lA1", "lB1", "lA2", "lB2"))
+    spec = b.spec("eB1", feats["eB1"])
+    assert spec.free.z == pytest.approx(b.roads["B1"].z + b.st.fit.clearance_m)
 
 
 def test_outer_connector_attaches_where_an_arc_at_its_radius_clears_the_loop():

@@ -46,9 +46,10 @@ Layout
   they cross each other: those leaving the second expressway (a T's
   terminating one) go one level higher — the two flyover levels of a
   four-level stack, the three levels of a directional T. A stub feeding or
-  fed by such a ramp ends ``clearance_m`` from its road toward that crest,
-  but no higher than ``clearance_m`` (and 0.5 m) under the lowest planned crest, so
-  that its other children (right turns) pass under every flyover; a planned
+  fed by such a ramp ends ``clearance_m`` from its road toward that crest;
+  if its other children (right turns) go on to a road (a turbine), no higher
+  than ``clearance_m`` (and 0.5 m) under the lowest planned crest, so that
+  they pass under every flyover; a planned
   ramp's road ends, and those of a ramp it leaves or joins, keep room from
   the crossing to climb to (descend from) the crest at the ramp's slope.
 * Ramps are fitted parents first; in one round, a low connector between two
@@ -335,9 +336,11 @@ class _Builder:
 
     def _stub_z(self, ramp: str, z_road: float, zf: float) -> float:
         """Height of a stub's free end: the clearance toward its planned children's crest
-        (so that they clear the roads near the stub), but no higher than the clearance
-        (and a margin) under the lowest planned crest, so that its unplanned children
-        (right turns) pass under every flyover; else ``zf``."""
+        (so that they clear the roads near the stub), else ``zf``. If its unplanned
+        children (right turns) go on to a road, they are fitted after the flyovers: then
+        no higher than the clearance (and a margin) under the lowest planned crest, so
+        that they pass under every flyover. (Right turns between two stubs are fitted
+        before the flyovers, which pass round or over them.)"""
         crests = [self.plan[k] for k in self._stub_kids(ramp) if k in self.plan]
         if not crests:
             return zf
@@ -345,7 +348,10 @@ class _Builder:
         if c <= z_road:
             return zf
         clear = self.st.fit.clearance_m
-        z = min(c, z_road + clear, min(self.plan.values()) - clear - _Z_MARGIN)
+        z = min(c, z_road + clear)
+        if any(k not in self.plan and not self._low_connector(k) for k in self._stub_kids(ramp)):
+            # they are fitted after the flyovers (they go on to a road): keep them under
+            z = min(z, min(self.plan.values()) - clear - _Z_MARGIN)
         return float(z) if z > z_road + 0.25 else float(min(c, z_road + clear))
 
     def _kids_room(self, kids: list[str], z: float, turning: bool = True) -> float:
