@@ -302,3 +302,27 @@ def test_outer_connector_attaches_where_an_arc_at_its_radius_clears_the_loop():
     # inside it) and the loop's are 3.5 m apart at least, so their lanes do not touch
     assert gap.min() >= 1.5
     assert rail.lo > t.max()  # and beyond the loop's reach along A1
+
+
+def test_ramps_on_long_wiggling_ramps_meet_their_attachment_within_1_cm():
+    # C-D roads with a 40 m radius target are long S-curves; ramps attach to them by station
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(40.0, 0.0) if r.startswith("c") else RampFeatures(100.0, 3.0)
+             for r in t.ramps}
+    g = build_interchange(t, {r: 3 for r in t.roads}, feats, class_id="c0", sample=0,
+                          seed=5).geometry
+    ramps = {r.id: r for r in g.ramps}
+    checked = 0
+    for ramp in g.ramps:
+        for att, k, j in ((ramp.start, 0, 0), (ramp.end, -1, 3)):
+            if att.parent not in ramps:
+                continue
+            parent = ramps[att.parent]
+            dense = sample_spline(np.array([p.p for p in parent.plan]), 20000)
+            tan = dense.tangent / np.hypot(*dense.tangent.T)[:, None]
+            left = np.stack([-tan[:, 1], tan[:, 0]], axis=-1)
+            line = dense.xy + att.offset_m * left
+            p = np.array([np.interp(att.s_m, dense.s, line[:, i]) for i in (0, 1)])
+            assert np.hypot(*(p - np.array(ramp.plan[k].p[j]))) < 0.01, (ramp.id, att.parent)
+            checked += 1
+    assert checked >= 8

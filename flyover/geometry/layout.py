@@ -666,9 +666,9 @@ class _Builder:
         pts, zs, hw, owner = [], [], [], []
         for rid, s in self.rails.items():
             pts.append(s["centre"])
-            zs.append(s["z"])
-            hw.append(np.full(len(s["z"]), self.width[rid] / 2))
-            owner += [rid] * len(s["z"])
+            zs.append(s["centre_z"])
+            hw.append(np.full(len(s["centre_z"]), self.width[rid] / 2))
+            owner += [rid] * len(s["centre_z"])
         if pts:
             return Obstacles(np.array(lines), np.concatenate(pts), np.concatenate(zs),
                              np.concatenate(hw), tuple(owner), tuple(names))
@@ -676,17 +676,13 @@ class _Builder:
 
     def record(self, ramp: str, fit: RampFit) -> None:
         self.fits[ramp] = fit
-        dense = sample_spline(fit.ctrl, 64)
-        xy = dense.xy
-        tang = dense.tangent
-        head = np.unwrap(np.arctan2(tang[:, 1], tang[:, 0]))
-        z, _ = evaluate_polys(fit.elevation, dense.s)
-        speed = np.hypot(tang[:, 0], tang[:, 1])[:, None]
-        right = np.stack([tang[:, 1], -tang[:, 0]], axis=-1) / np.maximum(speed, 1e-9)
-        s = dense.s
-        keep = np.concatenate([[True], np.diff(s) > 1e-9])
-        self.rails[ramp] = {"s": s[keep], "xy": xy[keep], "heading": head[keep], "z": z[keep],
-                            "centre": (xy + right * self.width[ramp] / 2)[keep]}
+        # stations ~1 m apart: a ramp attaching to this one is placed on them by linear
+        # interpolation (chord error < 1 cm down to 30 m radius); the lane centre, an
+        # obstacle for later ramps, is sampled as the search samples candidates
+        per_piece = math.ceil(fit.length_m / len(fit.ctrl))
+        stations = _stations(fit, int(min(4000, max(64, per_piece))))
+        centre = _stations(fit, 64, self.width[ramp] / 2)
+        self.rails[ramp] = {**stations, "centre": centre["xy"], "centre_z": centre["z"]}
         for end, t, is_start in ((fit.spec.start, fit.start_s, True), (fit.spec.end, fit.end_s, False)):
             if end is None or end.parent not in self.roads:
                 continue
@@ -697,7 +693,7 @@ class _Builder:
                 # along it: the next attachments keep their gap from all of it
                 road = self.roads[end.parent]
                 d = np.array([math.cos(road.heading), math.sin(road.heading)])
-                along = (xy - np.array(road.origin)) @ d \
+                along = (stations["xy"] - np.array(road.origin)) @ d \
                     if fit.spec.free is not None or self._is_loop(ramp) else [t]
                 self.attached.setdefault(end.parent, []).append(
                     (pos, float(min(t, np.min(along))), float(max(t, np.max(along))), ramp,
@@ -725,6 +721,19 @@ class _Builder:
                 out.append(r)
                 todo.remove(r)
         return out
+
+
+def _stations(fit: RampFit, m: int, right_m: float = 0.0) -> dict[str, np.ndarray]:
+    """Stations of a fitted ramp's reference line (or of the line ``right_m`` to its right),
+    ``m`` samples per Bézier piece: arc length ``s``, ``xy``, unwrapped ``heading``, ``z``."""
+    dense = sample_spline(fit.ctrl, m)
+    tang = dense.tangent
+    speed = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-9)[:, None]
+    xy = dense.xy + right_m * np.stack([tang[:, 1], -tang[:, 0]], axis=-1) / speed
+    z, _ = evaluate_polys(fit.elevation, dense.s)
+    keep = np.concatenate([[True], np.diff(dense.s) > 1e-9])
+    head = np.unwrap(np.arctan2(tang[:, 1], tang[:, 0]))
+    return {"s": dense.s[keep], "xy": xy[keep], "heading": head[keep], "z": z[keep]}
 
 
 def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
