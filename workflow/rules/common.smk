@@ -114,7 +114,7 @@ def export_outputs(wildcards):
 
 
 # -- geometry stage (workflow/rules/geometry.smk) --------------------------------
-GEOMETRY_VERSION = 1
+GEOMETRY_VERSION = 2
 
 
 def _features_buildable(class_id):
