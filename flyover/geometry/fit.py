@@ -516,7 +516,7 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
             best[0], best[1] = fun, generation
         elif settings.patience and generation - best[1] >= settings.patience:
             return True  # stagnated: more generations will not meet the targets
-        if generation < settings.min_generations:
+        if generation < settings.min_generations or not coarse_good:
             return None
         # the lowest-energy candidate that meets the targets on fine samples
         tried = 0
