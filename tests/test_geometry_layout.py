@@ -326,3 +326,23 @@ def test_ramps_on_long_wiggling_ramps_meet_their_attachment_within_1_cm():
             assert np.hypot(*(p - np.array(ramp.plan[k].p[j]))) < 0.01, (ramp.id, att.parent)
             checked += 1
     assert checked >= 8
+
+
+@pytest.mark.parametrize("seed", [5, 54])
+def test_attachments_on_a_ramp_keep_the_order_pos_gives_them(seed):
+    # on a C-D road: outer exit @0.2, loop entrance @0.4, loop exit @0.6, outer entrance @0.8
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(40.0 if r.startswith("c") else 210.0, 0.0 if r.startswith("c")
+                             else 2.0) for r in t.ramps}
+    g = build_interchange(t, {r: 4 for r in t.roads}, feats, class_id="c0", sample=0,
+                          seed=seed).geometry
+    for cd in ("cA1", "cA2", "cB1", "cB2"):
+        atts = []
+        for r in g.ramps:
+            for att, key in ((r.start, (cd, r.id)), (r.end, (r.id, cd))):
+                if att.parent == cd:
+                    atts.append((t.graph.edges[key]["pos"], att.s_m))
+        atts.sort()
+        assert len(atts) == 4
+        s = [a[1] for a in atts]
+        assert all(b - a > 20.0 for a, b in zip(s, s[1:])), (cd, atts)

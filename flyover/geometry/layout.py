@@ -527,7 +527,15 @@ class _Builder:
             key = (parent, self._current) if is_start else (self._current, parent)
             pos = self.g.edges[key].get("pos")
             if pos is not None:
-                lo, hi = max(0.05, pos - 0.15) * length, min(0.95, pos + 0.15) * length
+                # windows of neighbouring attachments on this parent do not overlap, so
+                # diverges and merges keep the order (and a gap) that ``pos`` gives them
+                others = sorted({d["pos"] for _, _, d in self.g.out_edges(parent, data=True)
+                                 if d.get("pos") is not None}
+                                | {d["pos"] for _, _, d in self.g.in_edges(parent, data=True)
+                                   if d.get("pos") is not None})
+                gaps = [b - a for a, b in zip(others, others[1:]) if b - a > 1e-9]
+                half = min([0.15] + [g / 2 - 0.02 for g in gaps if g / 2 - 0.02 > 0.01])
+                lo, hi = max(0.05, pos - half) * length, min(0.95, pos + half) * length
             elif self._is_loop(parent):  # leave a loop before it turns, join it after
                 head = st["heading"]
                 if is_start:
