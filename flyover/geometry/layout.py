@@ -294,6 +294,7 @@ class _Builder:
         self.rails: dict[str, dict] = {}  # fitted ramp → stations
         # parent road → (pos, extent along the road) of the ramps attached to it
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
+        self.attached_ramp: dict[str, list[tuple[float, float]]] = {}  # ramp → (pos, s)
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.plan = self._level_plan()
 
@@ -527,15 +528,19 @@ class _Builder:
             key = (parent, self._current) if is_start else (self._current, parent)
             pos = self.g.edges[key].get("pos")
             if pos is not None:
-                # windows of neighbouring attachments on this parent do not overlap, so
-                # diverges and merges keep the order (and a gap) that ``pos`` gives them
-                others = sorted({d["pos"] for _, _, d in self.g.out_edges(parent, data=True)
-                                 if d.get("pos") is not None}
-                                | {d["pos"] for _, _, d in self.g.in_edges(parent, data=True)
-                                   if d.get("pos") is not None})
-                gaps = [b - a for a, b in zip(others, others[1:]) if b - a > 1e-9]
-                half = min([0.15] + [g / 2 - 0.02 for g in gaps if g / 2 - 0.02 > 0.01])
-                lo, hi = max(0.05, pos - half) * length, min(0.95, pos + half) * length
+                lo, hi = max(0.05, pos - 0.15) * length, min(0.95, pos + 0.15) * length
+                # diverges and merges keep the order ``pos`` gives them on this parent, a
+                # gap apart from those already attached (a merge just before a diverge
+                # leaves no room for lane changes: movements become unroutable)
+                gap = min(self.st.gap_m, 0.05 * length)
+                wlo, whi = lo, hi
+                for p_other, t_other in self.attached_ramp.get(parent, []):
+                    if p_other < pos:
+                        lo = max(lo, t_other + gap)
+                    elif p_other > pos:
+                        hi = min(hi, t_other - gap)
+                if lo > hi - 1.0:
+                    lo, hi = wlo, whi
             elif self._is_loop(parent):  # leave a loop before it turns, join it after
                 head = st["heading"]
                 if is_start:
@@ -692,6 +697,11 @@ class _Builder:
         centre = _stations(fit, 64, self.width[ramp] / 2)
         self.rails[ramp] = {**stations, "centre": centre["xy"], "centre_z": centre["z"]}
         for end, t, is_start in ((fit.spec.start, fit.start_s, True), (fit.spec.end, fit.end_s, False)):
+            if end is not None and end.parent in self.rails:  # attached to a ramp
+                key = (end.parent, ramp) if is_start else (ramp, end.parent)
+                if self.g.edges[key].get("pos") is not None:
+                    self.attached_ramp.setdefault(end.parent, []).append(
+                        (self.g.edges[key]["pos"], float(t)))
             if end is None or end.parent not in self.roads:
                 continue
             key = (end.parent, ramp) if is_start else (ramp, end.parent)
