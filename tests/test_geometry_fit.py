@@ -141,3 +141,40 @@ def test_evolve_stops_on_request_and_returns_the_chosen_candidate():
                init=np.zeros((1, 3)))
     assert r.generations == 3
     assert r.fun > 0.0  # the zero vector given as init is the best, but not the one chosen
+
+
+def test_compiled_objective_kernel_matches_the_numpy_reference():
+    """The numba kernel measures candidates exactly as bezier/profile do in numpy."""
+    from flyover.geometry import _kernels
+    from flyover.geometry.bezier import turning
+    from flyover.geometry.profile import heights
+
+    rng = np.random.default_rng(4)
+    p, n_p, m = 40, 2, 24
+    ctrl = rng.normal(0.0, 120.0, (p, n_p, 4, 2))
+    ctrl[:, 1, 0] = ctrl[:, 0, 3]  # joined pieces
+    za, zb = rng.uniform(0, 7, p), rng.uniform(0, 7, p)
+    zc = np.maximum(np.maximum(za, zb), 13.0)
+    empty = Obstacles()
+    args = (15.0, 1.5, 5.5, np.zeros((0, 9))) + empty.grid(10.0)
+    length, rmin, turn, kvar, k2, g2, conf = _kernels.spline_terms(
+        ctrl, m, W, za, zc, zb, 0.04, 40.0, *args)
+    ref = sample_spline(ctrl, m)
+    assert np.allclose(length, ref.length, rtol=1e-12)
+    assert np.allclose(rmin, lane_radius(ref.curvature, W).min(-1), rtol=1e-9)
+    assert np.allclose(turn, turning(ref.tangent), atol=1e-9)
+    assert np.allclose(kvar, ref.curvature.var(-1), rtol=1e-6, atol=1e-12)
+    assert np.allclose(k2, (ref.curvature ** 2).mean(-1), rtol=1e-9)
+    kk = ref.curvature.reshape(p, n_p, m)
+    assert np.allclose(g2, ((kk[:, 1:, 0] - kk[:, :-1, -1]) ** 2).sum(-1), rtol=1e-9)
+    assert not conf.any()
+    # heights enter through the conflicts: a road band at each candidate's mid-height is
+    # met exactly where the numpy grade line is within the clearance of it
+    z = heights(ref.s, ref.length, za, zc, zb, 0.04, 40.0)
+    for i in range(3):
+        zl = float(z[i, m])
+        road = np.array([[-1e4, -1e4, 1.0, 0.0, -1e5, 1e5, -1e5, 1e5, zl]])  # covers the plane
+        got = _kernels.spline_terms(ctrl[i:i + 1], m, W, za[i:i + 1], zc[i:i + 1], zb[i:i + 1],
+                                    0.04, 40.0, 15.0, 1.5, 5.5, road, *empty.grid(10.0))[6][0]
+        inner = (ref.s[i] > 15.0) & (ref.s[i] < ref.length[i] - 15.0)
+        assert got == int((inner & (np.abs(z[i] - zl) < 5.5)).sum())

@@ -43,8 +43,8 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from flyover.geometry import _kernels
-from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline, turning
-from flyover.geometry.profile import climb_distance, elevation_polys, heights, max_grade
+from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
+from flyover.geometry.profile import climb_distance, elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",

@@ -634,8 +634,6 @@ class _Builder:
             extra_b = max(extra_b, self._kids_room(ins, self._end_z(end), turning=False))
         a = self._rail(ramp, start, True, loop, width, extra) if start else None
         b = self._rail(ramp, end, False, loop, width, extra_b) if end else None
-        z_a = self._end_z(start) if start else free.z
-        z_b = self._end_z(end) if end else free.z
         crest = self.plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest)
