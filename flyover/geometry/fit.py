@@ -484,8 +484,8 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
     gen = [0]
     count = [0]
 
-    # candidates meeting the acceptance test on the coarse samples; only these
-    # are checked again on fine samples when DE reports them as its best
+    # candidates meeting the acceptance test on the coarse samples; only these are
+    # checked again on fine samples (the lowest-energy few of the population, see stop)
     coarse_good: set[bytes] = set()
 
     def counted(x: np.ndarray) -> np.ndarray:
