@@ -494,21 +494,20 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         pp, rp = j.pieces["parent"], j.pieces["ramp"]
         plist, rlist = pieces[e.parent], pieces[e.ramp]
         pi, ri = plist.index(pp), rlist.index(rp)
+        # the parent runs through the junction (up → pp → down); the ramp's body leaves
+        # it after rp (a diverge, with an auxiliary lane before) or joins it before rp
+        # (a merge, with the auxiliary lane after)
+        up, down = plist[pi - 1], plist[pi + 1]
+        up.succ = down.pred = ("junction", j.id)
+        pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
+        aux = ("aux", e.side, ramp.lanes, ramp.width)
         if e.out:
-            up, down, rbody = plist[pi - 1], plist[pi + 1], rlist[ri + 1]
-            up.end_region = ("aux", e.side, ramp.lanes, ramp.width)
-            up.succ = ("junction", j.id)
-            down.pred = ("junction", j.id)
-            rbody.pred = ("junction", j.id)
-            pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
+            rbody = rlist[ri + 1]
+            up.end_region, rbody.pred = aux, ("junction", j.id)
             rp.pred, rp.succ = ("road", up.road_id, "end"), ("road", rbody.road_id, "start")
         else:
-            up, down, rbody = plist[pi - 1], plist[pi + 1], rlist[ri - 1]
-            down.start_region = ("aux", e.side, ramp.lanes, ramp.width)
-            up.succ = ("junction", j.id)
-            rbody.succ = ("junction", j.id)
-            down.pred = ("junction", j.id)
-            pp.pred, pp.succ = ("road", up.road_id, "end"), ("road", down.road_id, "start")
+            rbody = rlist[ri - 1]
+            down.start_region, rbody.succ = aux, ("junction", j.id)
             rp.pred, rp.succ = ("road", rbody.road_id, "end"), ("road", down.road_id, "start")
     grouped = {(e.parent, e.ramp, e.out) for j in junctions for e in j.group}
     for e in _events(g):
