@@ -292,9 +292,9 @@ class _Builder:
         self.g = topo.graph
         self.fits: dict[str, RampFit] = {}
         self.rails: dict[str, dict] = {}  # fitted ramp → stations
-        # parent road → (pos, extent along the road) of the ramps attached to it
+        # parent (road or ramp) → (pos, extent along it, ramp, station) of the ramps
+        # attached to it with a ``pos``
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
-        self.attached_ramp: dict[str, list[tuple[float, float]]] = {}  # ramp → (pos, s)
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.plan = self._level_plan()
 
@@ -534,7 +534,7 @@ class _Builder:
                 # leaves no room for lane changes: movements become unroutable)
                 gap = min(self.st.gap_m, 0.05 * length)
                 wlo, whi = lo, hi
-                for p_other, t_other in self.attached_ramp.get(parent, []):
+                for p_other, _, _, _, t_other in self.attached.get(parent, []):
                     if p_other < pos:
                         lo = max(lo, t_other + gap)
                     elif p_other > pos:
@@ -695,25 +695,21 @@ class _Builder:
         centre = _stations(fit, 64, self.width[ramp] / 2)
         self.rails[ramp] = {**stations, "centre": centre["xy"], "centre_z": centre["z"]}
         for end, t, is_start in ((fit.spec.start, fit.start_s, True), (fit.spec.end, fit.end_s, False)):
-            if end is not None and end.parent in self.rails:  # attached to a ramp
-                key = (end.parent, ramp) if is_start else (ramp, end.parent)
-                if self.g.edges[key].get("pos") is not None:
-                    self.attached_ramp.setdefault(end.parent, []).append(
-                        (self.g.edges[key]["pos"], float(t)))
-            if end is None or end.parent not in self.roads:
+            if end is None:
                 continue
             key = (end.parent, ramp) if is_start else (ramp, end.parent)
             pos = self.g.edges[key].get("pos")
-            if pos is not None:
+            if pos is None:
+                continue
+            lo_t = hi_t = float(t)
+            if end.parent in self.roads and (fit.spec.free is not None or self._is_loop(ramp)):
                 # a stub runs along its road up to its free end, a loop's circle reaches
                 # along it: the next attachments keep their gap from all of it
                 road = self.roads[end.parent]
                 d = np.array([math.cos(road.heading), math.sin(road.heading)])
-                along = (stations["xy"] - np.array(road.origin)) @ d \
-                    if fit.spec.free is not None or self._is_loop(ramp) else [t]
-                self.attached.setdefault(end.parent, []).append(
-                    (pos, float(min(t, np.min(along))), float(max(t, np.max(along))), ramp,
-                     float(t)))
+                along = (stations["xy"] - np.array(road.origin)) @ d
+                lo_t, hi_t = float(min(t, along.min())), float(max(t, along.max()))
+            self.attached.setdefault(end.parent, []).append((pos, lo_t, hi_t, ramp, float(t)))
 
     def order(self) -> list[str]:
         done: set[str] = set()
