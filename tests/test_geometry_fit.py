@@ -1,12 +1,13 @@
 """Ramp fitting: continuity, radius and slope targets, loops, flyovers, infeasible targets."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
-from flyover.geometry.fit import FitSettings, Obstacles, Rail, RampSpec, fit_ramp
+from flyover.geometry.fit import FitSettings, Obstacles, Rail, RampSpec, conflicts_with, fit_ramp
 from flyover.geometry.profile import evaluate_polys, max_grade
 
 W = 4.0
@@ -86,6 +87,38 @@ def test_flyover_clears_the_road_it_crosses():
     z, _ = evaluate_polys(fit.elevation, dense.s.ravel())
     over = (dense.xy[:, 0] < -2.0) & (dense.xy[:, 0] > -9.5)
     assert over.any() and (z[over] - 6.5 >= 5.5 - 1e-6).all()
+
+
+def _median_flyover(lead_m):
+    # a left exit into the median of eastbound A1 (z 0, attached at x 0..5) turning north
+    # onto B1 (z 6.5, at x 480), across westbound A2 (z 0) beside the median: at 2 % the
+    # ramp is 5.5 m up only after ~315 m, so it has to climb beside A1 before it turns
+    a = Rail.line("A1", "Out-L", (0, 0), 0.0, 0.0, W, 0.0, 5.0)
+    b = Rail.line("B1", "In-R", (480, 0), np.pi / 2, 6.5, -7.5, 60, 800)
+    a2 = [-1e4, 4.0, 1.0, 0.0, -1e5, 1e5, 0.0, 11.25, 0.0]  # A2: y = 4 .. 15.25
+    return RampSpec("fly", a, b, None, np.pi / 2, 1, W, 150.0, 2.0, None, lead_m), \
+        Obstacles(np.array([a2]))
+
+
+def test_a_flyover_climbs_along_its_road_on_a_straight_lead_before_it_turns():
+    spec, obst = _median_flyover((400.0, 60.0))
+    fit = fit_ramp(spec, obst, seed=1)
+    assert fit.ok and fit.conflicts == 0
+    _check_ends(fit)
+    assert fit.ctrl.shape[0] == spec.pieces + 2  # a lead piece at each end
+    lead = fit.ctrl[0]
+    assert np.allclose(lead[:, 1], lead[0, 1], atol=1e-9)  # straight, along A1's heading
+    assert 1.0 <= lead[3, 0] - lead[0, 0] <= 400.0
+    tail = fit.ctrl[-1]
+    assert np.allclose(tail[:, 0], tail[3, 0], atol=1e-9)  # straight, along B1's heading
+    # without leads one cubic turns too early: it meets A2 before it has climbed
+    for seed in range(3):
+        plain = fit_ramp(replace(spec, lead_m=(None, None)), obst, seed=seed)
+        assert plain.ctrl.shape[0] == 1 and not plain.ok
+        # it is A2 it meets, with as many samples as the search counted
+        met = conflicts_with(plain, obst, FitSettings())
+        assert list(met) == ["road 0"] and met["road 0"] == plain.conflicts
+    assert conflicts_with(fit, obst, FitSettings()) == {}
 
 
 def test_same_level_ramp_cannot_meet_a_slope_and_says_so():

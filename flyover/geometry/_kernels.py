@@ -217,17 +217,23 @@ def _rail_at(s, rs, rx, ry, rh, rz, offset):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z):  # pragma: no cover
+def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z,
+           leads):  # pragma: no cover
     """Control points of candidate ramps ``x`` ``(D, P)`` (see ``flyover.geometry.fit``).
 
     ``a_rail``/``b_rail``: ``(5, K)`` stations, x, y, heading, z of the start
     and end rails (``K = 0`` when that end is free). ``free_mode``: 0 none,
     1 free end, 2 free start. Returns ``ctrl (P, n, 4, 2)``, the stations on
     the rails ``(2, P)``, the end poses ``(2, 4, P)`` (x, y, heading, z) and
-    the intended total turn ``(P,)``.
+    the intended total turn ``(P,)``. ``leads``: 1 when every attached end has
+    a straight lead (its length a decision variable, after the stations): the
+    chain then runs between the ends of the leads, which become one straight
+    piece each at the start / end of ``ctrl``.
     """
     d_count, p_count = x.shape
-    ctrl = np.empty((p_count, pieces, 4, 2))
+    lead_a = 1 if (leads and a_rail.shape[1] > 0) else 0
+    lead_b = 1 if (leads and b_rail.shape[1] > 0) else 0
+    ctrl = np.empty((p_count, pieces + lead_a + lead_b, 4, 2))
     stations = np.zeros((2, p_count))
     poses = np.zeros((2, 4, p_count))
     turn = np.empty(p_count)
@@ -249,6 +255,13 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z)
             xb, yb, hb, zb = _rail_at(x[i, p], b_rail[0], b_rail[1], b_rail[2], b_rail[3],
                                       b_rail[4], b_off)
             i += 1
+        la = lb = 0.0
+        if lead_a:
+            la = x[i, p]
+            i += 1
+        if lead_b:
+            lb = x[i, p]
+            i += 1
         if free_mode > 0:
             d, e, phi = x[i, p], x[i + 1, p], x[i + 2, p]
             i += 3
@@ -266,28 +279,42 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z)
         raw = hb - ha
         tr = turn_rad + ((raw - turn_rad + np.pi) % (2 * np.pi) - np.pi)
         turn[p] = tr
-        cx, cy = xb - xa, yb - ya
+        # the chain runs from the end of the start lead to the start of the end lead
+        ca, sa, cb, sb = np.cos(ha), np.sin(ha), np.cos(hb), np.sin(hb)
+        xa2, ya2 = xa + la * ca, ya + la * sa
+        xb2, yb2 = xb - lb * cb, yb - lb * sb
+        if lead_a:
+            for q in range(4):
+                ctrl[p, 0, q, 0] = xa + la * q / 3.0 * ca
+                ctrl[p, 0, q, 1] = ya + la * q / 3.0 * sa
+        if lead_b:
+            last = pieces + lead_a
+            for q in range(4):
+                ctrl[p, last, q, 0] = xb2 + lb * q / 3.0 * cb
+                ctrl[p, last, q, 1] = yb2 + lb * q / 3.0 * sb
+        cx, cy = xb2 - xa2, yb2 - ya2
         dist = max(np.hypot(cx, cy), 1.0)
         ux, uy = cx / dist, cy / dist
-        jx[0], jy[0], jh[0] = xa, ya, ha
+        jx[0], jy[0], jh[0] = xa2, ya2, ha
         for k in range(1, pieces):
             u, v, dh = x[i, p], x[i + 1, p], x[i + 2, p]
             lam_in[k - 1] = x[i + 3, p]
             lam_out[k] = x[i + 4, p]
             i += 5
             f = k / pieces
-            jx[k] = xa + f * cx + u * dist * ux - v * dist * uy
-            jy[k] = ya + f * cy + u * dist * uy + v * dist * ux
+            jx[k] = xa2 + f * cx + u * dist * ux - v * dist * uy
+            jy[k] = ya2 + f * cy + u * dist * uy + v * dist * ux
             jh[k] = ha + tr * f + dh
-        jx[pieces], jy[pieces], jh[pieces] = xb, yb, ha + tr
+        jx[pieces], jy[pieces], jh[pieces] = xb2, yb2, ha + tr
         for k in range(pieces):
             span = np.hypot(jx[k + 1] - jx[k], jy[k + 1] - jy[k])
-            ctrl[p, k, 0, 0], ctrl[p, k, 0, 1] = jx[k], jy[k]
-            ctrl[p, k, 1, 0] = jx[k] + lam_out[k] * span * np.cos(jh[k])
-            ctrl[p, k, 1, 1] = jy[k] + lam_out[k] * span * np.sin(jh[k])
-            ctrl[p, k, 2, 0] = jx[k + 1] - lam_in[k] * span * np.cos(jh[k + 1])
-            ctrl[p, k, 2, 1] = jy[k + 1] - lam_in[k] * span * np.sin(jh[k + 1])
-            ctrl[p, k, 3, 0], ctrl[p, k, 3, 1] = jx[k + 1], jy[k + 1]
+            o = k + lead_a
+            ctrl[p, o, 0, 0], ctrl[p, o, 0, 1] = jx[k], jy[k]
+            ctrl[p, o, 1, 0] = jx[k] + lam_out[k] * span * np.cos(jh[k])
+            ctrl[p, o, 1, 1] = jy[k] + lam_out[k] * span * np.sin(jh[k])
+            ctrl[p, o, 2, 0] = jx[k + 1] - lam_in[k] * span * np.cos(jh[k + 1])
+            ctrl[p, o, 2, 1] = jy[k + 1] - lam_in[k] * span * np.sin(jh[k + 1])
+            ctrl[p, o, 3, 0], ctrl[p, o, 3, 1] = jx[k + 1], jy[k + 1]
         poses[0, 0, p], poses[0, 1, p], poses[0, 2, p], poses[0, 3, p] = xa, ya, ha, za
         poses[1, 0, p], poses[1, 1, p], poses[1, 2, p], poses[1, 3, p] = xb, yb, hb, zb
     return ctrl, stations, poses, turn

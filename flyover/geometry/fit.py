@@ -48,9 +48,12 @@ from flyover.geometry.profile import climb_distance, elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
-           "ramp_objective"]
+           "ramp_objective", "conflicts_with", "recount"]
 
 log = logging.getLogger(__name__)
+
+#: shortest lead (m): a lead is always a real straight piece, never a degenerate one
+LEAD_MIN_M = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,6 +153,14 @@ class RampSpec:
     target_radius_m: float
     target_slope_pct: float
     z_crest: float | None = None
+    #: longest straight lead (m) at the start / end, where the ramp runs along its
+    #: parent's heading before it turns (e.g. climbing beside it); ``None``: no lead
+    lead_m: tuple[float | None, float | None] = (None, None)
+
+    def leads(self) -> tuple[bool, bool]:
+        """Whether the start / end has a lead (only attached ends have one; both or neither)."""
+        on = any(v is not None for v in self.lead_m)
+        return (on and self.start is not None, on and self.end is not None)
 
 
 @dataclass(frozen=True)
@@ -218,7 +229,7 @@ class RampFit:
 
 def _n_vars(spec: RampSpec) -> int:
     n = (spec.start is not None) + (spec.end is not None) + (3 if spec.free else 0)
-    return n + 2 + 5 * (spec.pieces - 1)
+    return n + sum(spec.leads()) + 2 + 5 * (spec.pieces - 1)
 
 
 def bounds(spec: RampSpec) -> list[tuple[float, float]]:
@@ -227,6 +238,9 @@ def bounds(spec: RampSpec) -> list[tuple[float, float]]:
     for rail in (spec.start, spec.end):
         if rail is not None:
             b.append((rail.lo, rail.hi))
+    for on, longest in zip(spec.leads(), spec.lead_m):
+        if on:
+            b.append((LEAD_MIN_M, max(LEAD_MIN_M + 1.0, longest or 0.0)))
     if spec.free:
         b += [spec.free.forward, spec.free.lateral, spec.free.turn]
     b += [(0.05, 0.8), (0.05, 0.8)]
@@ -255,13 +269,14 @@ def _rail_args(spec: RampSpec) -> tuple:
 
     mode = 0 if spec.free is None else (1 if spec.start is not None else 2)
     return (int(spec.pieces), float(spec.turn_rad), *rail(spec.start), *rail(spec.end), mode,
-            float(spec.free.z) if spec.free else 0.0)
+            float(spec.free.z) if spec.free else 0.0, int(any(spec.leads())))
 
 
 def _decode(spec: RampSpec, x: np.ndarray, rails: tuple | None = None) -> _Decoded:
     """Control points for decision vectors ``x`` of shape ``(D, P)``.
 
-    Decision vector: the stations of the attached ends on their rails; for a
+    Decision vector: the stations of the attached ends on their rails; the
+    lengths of their straight leads (:attr:`RampSpec.lead_m`); for a
     free end its forward and lateral offset and extra turn; the tangent
     lengths at both ends (fractions of the piece chord); per interior joint
     its position (along / across the chord, fractions of it), its heading
@@ -563,12 +578,67 @@ def measure(spec: RampSpec, x: np.ndarray, obstacles: Obstacles, settings: FitSe
     g = spec.target_slope_pct / 100.0
     polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
     slope = max_grade(polys, length) * 100.0
-    coarse = sample_spline(ctrl, 64)
+    pose = lambda e: tuple(float(v[0]) for v in e)  # noqa: E731
+    fit = RampFit(spec, ctrl, float(dec.sa[0]), float(dec.sb[0]), pose(dec.a), pose(dec.b),
+                  polys, length, rmin, slope, 0, evaluations, seconds, zc)
+    return recount(fit, obstacles, settings)
+
+
+def recount(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> RampFit:
+    """``fit`` with its same-level conflicts counted again against ``obstacles``
+    (as :func:`measure` counts them: 64 samples per piece)."""
     from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
 
-    z, _ = evaluate_polys(polys, coarse.s.ravel())
-    conf = int(_conflicts(spec, coarse.xy[None], coarse.tangent[None], coarse.s[None], z[None],
-                          np.array([length]), obstacles, settings)[0])
-    pose = lambda e: tuple(float(v[0]) for v in e)  # noqa: E731
-    return RampFit(spec, ctrl, float(dec.sa[0]), float(dec.sb[0]), pose(dec.a), pose(dec.b),
-                   polys, length, rmin, slope, conf, evaluations, seconds, zc)
+    coarse = sample_spline(fit.ctrl, 64)
+    z, _ = evaluate_polys(fit.elevation, coarse.s.ravel())
+    conf = int(_conflicts(fit.spec, coarse.xy[None], coarse.tangent[None], coarse.s[None],
+                          z[None], np.array([fit.length_m]), obstacles, settings)[0])
+    return replace(fit, conflicts=conf)
+
+
+def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> dict[str, int]:
+    """What a fitted ramp meets at the same level: obstacle name → samples (as measured).
+
+    The same test as the search's (lane-centre samples, 64 per piece, outside the
+    end zones; a road's band or a ramp's lane closer than the two half widths and
+    less than the clearance apart in height), in numpy, naming the road or ramp.
+    """
+    from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
+
+    coarse = sample_spline(fit.ctrl, 64)
+    s = coarse.s.ravel()
+    z, _ = evaluate_polys(fit.elevation, s)
+    tang = coarse.tangent
+    speed = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-9)
+    half = 0.5 * fit.spec.width_m / speed
+    cx, cy = coarse.xy[:, 0] + half * tang[:, 1], coarse.xy[:, 1] - half * tang[:, 0]
+    inner = (s > settings.end_zone_m) & (s < fit.length_m - settings.end_zone_m)
+    hw = 0.5 * fit.spec.width_m - settings.margin_m
+    out: dict[str, int] = {}
+    met = np.zeros((len(s), 0), bool)
+    names: list[str] = []
+    lines = np.asarray(obstacles.lines).reshape(-1, 9)
+    line_names = obstacles.line_names or tuple(f"road {i}" for i in range(len(lines)))
+    for row, name in zip(lines, line_names):
+        rx, ry = cx - row[0], cy - row[1]
+        along = rx * row[2] + ry * row[3]
+        lat = row[2] * ry - row[3] * rx
+        hit = ((np.abs(z - row[8]) < settings.clearance_m) & (along > row[4]) & (along < row[5])
+               & (lat > row[6] - hw) & (lat < row[7] + hw))
+        met = np.column_stack([met, hit])
+        names.append(name)
+    if len(obstacles.points):
+        owner = np.asarray(obstacles.owner)
+        for name in dict.fromkeys(obstacles.owner):
+            k = owner == name
+            p, pz, phw = obstacles.points[k], obstacles.z[k], obstacles.half_width[k]
+            d2 = (cx[:, None] - p[None, :, 0]) ** 2 + (cy[:, None] - p[None, :, 1]) ** 2
+            hit = ((d2 < (hw + phw[None, :]) ** 2)
+                   & (np.abs(z[:, None] - pz[None, :]) < settings.clearance_m)).any(1)
+            met = np.column_stack([met, hit])
+            names.append(name)
+    for j, name in enumerate(names):
+        n = int((met[:, j] & inner).sum())
+        if n:
+            out[name] = n
+    return out

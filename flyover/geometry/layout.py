@@ -72,7 +72,9 @@ import numpy as np
 
 from flyover.errors import FlyoverError
 from flyover.geometry.bezier import sample_spline
-from flyover.geometry.fit import FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, fit_ramp
+from flyover.geometry.fit import (
+    FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, conflicts_with, fit_ramp, recount,
+)
 from flyover.geometry.model import (
     Attachment, InterchangeGeometry, RampGeometry, RoadGeometry,
 )
@@ -110,6 +112,8 @@ class LayoutSettings:
     road_margin_m: float = 100.0
     cd_clear_m: float = 350.0
     stub_window_m: float = 200.0
+    leads: bool = True
+    lead_min_m: float = 60.0
     max_resamples: int = 3
     restarts: int = 1
     fit: FitSettings = field(default_factory=FitSettings)
@@ -636,7 +640,26 @@ class _Builder:
         b = self._rail(ramp, end, False, loop, width, extra_b) if end else None
         crest = self.plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
-                        float(feat.slope_pct), crest)
+                        float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat))
+
+    def _leads(self, start, end, crest, free, feat: RampFeatures) -> tuple:
+        """Longest straight leads of a ramp that climbs: each attached end may run
+        straight along its parent's heading for as long as it takes to climb from
+        that end to the ramp's top at its slope (at least ``lead_min_m``), so that
+        a flyover can gain height beside its road before it turns over what it
+        crosses. Level ramps get none (their geometry is as without leads)."""
+        st = self.st
+        if not st.leads:
+            return (None, None)
+        g = max(feat.slope_pct, 0.5) / 100.0
+        za = self._end_z(start) if start else None
+        zb = self._end_z(end) if end else None
+        top = max(z for z in (crest, za, zb, free.z if free else None) if z is not None)
+        climbs = [float(climb_distance(top - z, g, st.fit.transition_m)) if z is not None
+                  else 0.0 for z in (za, zb)]
+        if max(climbs) <= 0:
+            return (None, None)
+        return tuple(max(st.lead_min_m, c) for c in climbs)
 
     def _nominal_heading(self, end, is_start) -> float:
         node, label = end
@@ -684,6 +707,13 @@ class _Builder:
             return Obstacles(np.array(lines), np.concatenate(pts), np.concatenate(zs),
                              np.concatenate(hw), tuple(owner), tuple(names))
         return Obstacles(np.array(lines), line_names=tuple(names))
+
+    def unrecord(self, ramp: str) -> None:
+        """Forget a fitted ramp (to fit it again): its fit, stations and attachments."""
+        self.fits.pop(ramp, None)
+        self.rails.pop(ramp, None)
+        for parent, items in self.attached.items():
+            self.attached[parent] = [a for a in items if a[3] != ramp]
 
     def record(self, ramp: str, fit: RampFit) -> None:
         self.fits[ramp] = fit
@@ -749,11 +779,17 @@ def _stations(fit: RampFit, m: int, right_m: float = 0.0) -> dict[str, np.ndarra
 
 
 def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
-    """Fit; while the ramp meets something at its level, lift its crest one level."""
+    """Fit; while the ramp meets something at its level, lift its crest one level.
+
+    The first fits have no leads; a ramp that still misses its targets is fitted
+    again with its straight leads (:meth:`_Builder._leads`), then with other seeds
+    (``restarts`` in all)."""
     st = b.st
     evals, secs = 0, 0.0
     obst = b.obstacles()
     tried = []
+    restarts = [spec] if any(spec.leads()) else []
+    spec = replace(spec, lead_m=(None, None))
     while True:
         fit = fit_ramp(spec, obst, st.fit, seed=seed)
         evals += fit.evaluations
@@ -766,10 +802,11 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
-    for k in range(st.restarts):  # same targets, another DE seed
+    restarts += [spec] * st.restarts
+    for k, again in enumerate(restarts[:st.restarts]):  # same targets: leads, another seed
         if best.ok or _systematic(best):
             break
-        fit = fit_ramp(replace(spec, z_crest=best.spec.z_crest), obst, st.fit,
+        fit = fit_ramp(replace(again, z_crest=best.spec.z_crest), obst, st.fit,
                        seed=seed + 104_729 * (k + 1))
         evals += fit.evaluations
         secs += fit.seconds
@@ -810,6 +847,9 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         feat = features[ramp]
         rseed = (seed * 1_000_003 + k * 7919) % (2**32)
         fit, evals, secs = _fit_with_levels(b, b.spec(ramp, feat), rseed)
+        if fit.conflicts:  # make way: refit the ramps it meets, then it again
+            fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
+            evals, secs = evals + e2, secs + s2
         first_ok = fit.ok
         attempts, tried = 0, [fit]
         while (not fit.ok and resampler is not None and attempts < st.max_resamples
@@ -825,10 +865,54 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             fit = fit2
         if not fit.ok:
             fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))
-        reason = "" if fit.ok else _reason(fit)
+        if fit.conflicts and attempts:  # on the last targets too
+            fit, e2, s2 = _reroute(b, ramp, fit, rseed + attempts, outcomes)
+            evals, secs = evals + e2, secs + s2
+        met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
+        reason = "" if fit.ok else _reason(fit, met)
         b.record(ramp, fit)
         outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs))
     return Interchange(_assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
+
+
+def _reroute(b: _Builder, ramp: str, fit: RampFit, seed: int,
+             outcomes: list[RampOutcome]) -> tuple[RampFit, int, float]:
+    """Rip up and reroute: ``ramp`` still meets fitted ramps at its level, so each of
+    them (one nothing is attached to yet, and not ``ramp``'s parent) is fitted again
+    on its own targets with ``ramp``'s curve as an obstacle; a refit is kept only when
+    it meets its targets with no conflict. Then ``ramp`` is measured against the new
+    obstacles, and fitted again if it still meets something. Returns ``ramp``'s
+    fit and the effort spent."""
+    st = b.st
+    evals, secs = 0, 0.0
+    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
+    used = {r.parent for f in b.fits.values() for r in (f.spec.start, f.spec.end) if r is not None}
+    met = conflicts_with(fit, b.obstacles(), st.fit)
+    movable = [m for m in met if m in b.fits and m not in parents and m not in used]
+    if not movable:
+        return fit, evals, secs
+    by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
+    for k, other in enumerate(movable):
+        old = b.fits[other]
+        b.unrecord(other)
+        b.record(ramp, fit)  # an obstacle while the other one is refitted
+        spec = b.spec(other, RampFeatures(old.spec.target_radius_m, old.spec.target_slope_pct))
+        new, e, t = _fit_with_levels(b, spec, seed + 7_368_787 * (k + 1))
+        evals, secs = evals + e, secs + t
+        b.unrecord(ramp)
+        keep = new if (new.ok and new.conflicts == 0) else old
+        b.record(other, keep)
+        if keep is new:
+            o = outcomes[by_ramp[other]]
+            outcomes[by_ramp[other]] = replace(o, fit=new, infeasible="",
+                                               evaluations=o.evaluations + e,
+                                               seconds=o.seconds + t)
+    fit = recount(fit, b.obstacles(), st.fit)
+    if fit.conflicts:
+        again, e, t = _fit_with_levels(b, replace(fit.spec, z_crest=b.plan.get(ramp)), seed + 1)
+        evals, secs = evals + e, secs + t
+        fit = min([fit, again], key=lambda f: (f.conflicts, not f.ok))
+    return fit, evals, secs
 
 
 def _systematic(fit: RampFit) -> bool:
@@ -839,7 +923,7 @@ def _systematic(fit: RampFit) -> bool:
     return level and fit.radius_ok and fit.conflicts == 0 and not fit.slope_ok
 
 
-def _reason(fit: RampFit) -> str:
+def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
     parts = []
     sp = fit.spec
     za, zb = fit.start_pose[3], fit.end_pose[3]
@@ -852,7 +936,9 @@ def _reason(fit: RampFit) -> str:
     if not fit.radius_ok:
         parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
     if fit.conflicts:
-        parts.append(f"same-level conflict ({fit.conflicts} samples)")
+        with_ = ", ".join(f"{k} ({n})" for k, n in sorted((met or {}).items()))
+        parts.append(f"same-level conflict ({fit.conflicts} samples)"
+                     + (f" with {with_}" if with_ else ""))
     return "; ".join(parts)
 
 

@@ -114,7 +114,8 @@ def export_outputs(wildcards):
 
 
 # -- geometry stage (workflow/rules/geometry.smk) --------------------------------
-GEOMETRY_VERSION = 2
+# 3: straight leads on climbing ramps (geometry.leads)
+GEOMETRY_VERSION = 3
 
 
 def _features_buildable(class_id):
