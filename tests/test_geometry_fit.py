@@ -190,7 +190,7 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
     zc = np.maximum(np.maximum(za, zb), 13.0)
     empty = Obstacles()
     args = (15.0, 1.5, 5.5, np.zeros((0, 9))) + empty.grid(10.0)
-    length, rmin, turn, kvar, k2, g2, conf = _kernels.spline_terms(
+    length, rmin, turn, kvar, k2, g2, conf, depth = _kernels.spline_terms(
         ctrl, m, W, za, zc, zb, 0.04, 40.0, *args)
     ref = sample_spline(ctrl, m)
     assert np.allclose(length, ref.length, rtol=1e-12)
@@ -200,7 +200,7 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
     assert np.allclose(k2, (ref.curvature ** 2).mean(-1), rtol=1e-9)
     kk = ref.curvature.reshape(p, n_p, m)
     assert np.allclose(g2, ((kk[:, 1:, 0] - kk[:, :-1, -1]) ** 2).sum(-1), rtol=1e-9)
-    assert not conf.any()
+    assert not conf.any() and not depth.any()
     # heights enter through the conflicts: a road band at each candidate's mid-height is
     # met exactly where the numpy grade line is within the clearance of it
     z = heights(ref.s, ref.length, za, zc, zb, 0.04, 40.0)
@@ -208,6 +208,9 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
         zl = float(z[i, m])
         road = np.array([[-1e4, -1e4, 1.0, 0.0, -1e5, 1e5, -1e5, 1e5, zl]])  # covers the plane
         got = _kernels.spline_terms(ctrl[i:i + 1], m, W, za[i:i + 1], zc[i:i + 1], zb[i:i + 1],
-                                    0.04, 40.0, 15.0, 1.5, 5.5, road, *empty.grid(10.0))[6][0]
+                                    0.04, 40.0, 15.0, 1.5, 5.5, road, *empty.grid(10.0))
         inner = (ref.s[i] > 15.0) & (ref.s[i] < ref.length[i] - 15.0)
-        assert got == int((inner & (np.abs(z[i] - zl) < 5.5)).sum())
+        hit = inner & (np.abs(z[i] - zl) < 5.5)
+        assert got[6][0] == int(hit.sum())
+        # deep in a band that covers the plane: the way out is up or down
+        assert got[7][0] == pytest.approx((5.5 - np.abs(z[i][hit] - zl)).sum(), rel=1e-9)

@@ -346,3 +346,33 @@ def test_attachments_on_a_ramp_keep_the_order_pos_gives_them(seed):
         assert len(atts) == 4
         s = [a[1] for a in atts]
         assert all(b - a > 20.0 for a, b in zip(s, s[1:])), (cd, atts)
+
+
+def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
+    """Rip-up and reroute: on these targets (a catalog feature set) the directional T's
+    left turn rL, fitted after rA2, still meets it; rA2 is fitted again around rL and
+    every ramp then meets its targets with no same-level conflict."""
+    from flyover.geometry import layout  # noqa: PLC0415
+
+    t = catalog_topologies()["directional_t"]
+    lanes = {"A1": 5, "A2": 3, "B1": 5, "B2": 3}
+    feats = {"rA1": RampFeatures(280.0, 5.0), "rA2": RampFeatures(150.0, 2.0),
+             "rL": RampFeatures(60.0, 1.0), "rR": RampFeatures(30.0, 3.0)}
+    calls = []
+    real = layout._reroute
+
+    def spy(b, ramp, fit, seed, outcomes):
+        before = dict(b.fits)
+        out = real(b, ramp, fit, seed, outcomes)
+        calls.append((ramp, fit.conflicts, sorted(k for k in before if b.fits[k] is not before[k])))
+        return out
+
+    monkeypatch.setattr(layout, "_reroute", spy)
+    ic = build_interchange(t, lanes, feats, seed=774928367)
+    assert calls == [("rL", calls[0][1], ["rA2"])] and calls[0][1] > 0
+    assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
+    # without it rL keeps its conflict with rA2, and says so
+    monkeypatch.setattr(layout, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
+    ic = build_interchange(t, lanes, feats, seed=774928367)
+    r_l = next(o for o in ic.outcomes if o.ramp == "rL")
+    assert r_l.fit.conflicts > 0 and "with rA2" in r_l.infeasible

@@ -43,13 +43,19 @@ def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float
 @njit(cache=True, nogil=True)
 def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
               px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover - compiled
-    """Conflicting inner samples per candidate: ``(P,)`` from samples ``(P, N)``.
+    """Conflicting inner samples per candidate ``(P,)`` from samples ``(P, N)``, and
+    how deep they are in (``(P,)``, metres summed over the conflicting samples).
 
+    A sample's depth is the least it would have to move to be clear of all it
+    meets: sideways (out of a road's band or a ramp's lane) or up/down (to the
+    clearance), whichever is less, the largest over what it meets. It grades the
+    penalty inside a conflict, which the count alone leaves flat.
     ``px, py, pz, phw``: obstacle ramp samples sorted by grid cell
     (``starts`` per cell, see :func:`grid`).
     """
     p_count, n = cx.shape
     out = np.zeros(p_count, np.int64)
+    depth = np.zeros(p_count)
     n_lines = lines.shape[0]
     for p in range(p_count):
         hi_s = length[p] - end_zone
@@ -58,39 +64,38 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
             if si <= end_zone or si >= hi_s:
                 continue
             x, y, zz = cx[p, i], cy[p, i], z[p, i]
-            hit = False
+            deep = 0.0
             for k in range(n_lines):
-                if abs(zz - lines[k, 8]) >= clearance:
+                dz = clearance - abs(zz - lines[k, 8])
+                if dz <= 0.0:
                     continue
                 rx, ry = x - lines[k, 0], y - lines[k, 1]
                 along = rx * lines[k, 2] + ry * lines[k, 3]
                 if along <= lines[k, 4] or along >= lines[k, 5]:
                     continue
                 lat = lines[k, 2] * ry - lines[k, 3] * rx
-                if lat > lines[k, 6] - hw and lat < lines[k, 7] + hw:
-                    hit = True
-                    break
-            if not hit and px.shape[0] > 0:
+                lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
+                if lat > lo and lat < hi:
+                    deep = max(deep, min(dz, lat - lo, hi - lat))
+            if px.shape[0] > 0:
                 gx = int((x - x0) // cell)
                 gy = int((y - y0) // cell)
                 for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
-                    if hit:
-                        break
                     for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
                         c = ix * ny + iy
                         for j in range(starts[c], starts[c + 1]):
-                            if abs(zz - pz[j]) >= clearance:
+                            dz = clearance - abs(zz - pz[j])
+                            if dz <= 0.0:
                                 continue
                             dx, dy = x - px[j], y - py[j]
                             r = hw + phw[j]
-                            if dx * dx + dy * dy < r * r:
-                                hit = True
-                                break
-                        if hit:
-                            break
-            if hit:
+                            d2 = dx * dx + dy * dy
+                            if d2 < r * r:
+                                deep = max(deep, min(dz, r - np.sqrt(d2)))
+            if deep > 0.0:
                 out[p] += 1
-    return out
+                depth[p] += deep
+    return out, depth
 
 
 @njit(cache=True, inline="always")
@@ -118,8 +123,8 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
     Samples each cubic piece at ``m`` parameter values (as
     :func:`flyover.geometry.bezier.sample_spline`) and returns per candidate:
     length, minimum lane-centre radius, total turning, curvature variance,
-    mean squared curvature, squared curvature jumps at joints, and the number
-    of conflicting samples (heights from the grade line of
+    mean squared curvature, squared curvature jumps at joints, the number
+    of conflicting samples and their depth (:func:`conflicts`; heights from the grade line of
     :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``).
     """
     p_count, n_p = ctrl.shape[0], ctrl.shape[1]
@@ -131,6 +136,7 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
     k2 = np.zeros(p_count)
     g2 = np.zeros(p_count)
     conf = np.zeros(p_count, np.int64)
+    deep = np.zeros(p_count)
     t = np.linspace(0.0, 1.0, m)
     xs = np.empty(n)
     ys = np.empty(n)
@@ -200,10 +206,11 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
             zz[0, j] = (za[p] + sr * _climb(ss[j], hr, grade, transition)
                         + sf * (hf - _climb(off - ss[j], hf, grade, transition)))
         ln[0] = off
-        conf[p] = conflicts(cx, cy, s1, zz, ln, end_zone, hw, clearance, lines,
-                            px, py, pz, phw, starts, x0, y0, cell, nx, ny)[0]
+        count, dp = conflicts(cx, cy, s1, zz, ln, end_zone, hw, clearance, lines,
+                              px, py, pz, phw, starts, x0, y0, cell, nx, ny)
+        conf[p], deep[p] = count[0], dp[0]
     kvar = np.maximum(kvar, 0.0)
-    return length, rmin, turn, kvar, k2, g2, conf
+    return length, rmin, turn, kvar, k2, g2, conf, deep
 
 
 @njit(cache=True, inline="always")

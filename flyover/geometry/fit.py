@@ -16,7 +16,9 @@ long enough; the search makes it long enough.
 Objective (whole population at once, numpy): curvature variance + radius
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
-and already fitted ramps, and curvature jumps at joints (G2 preferred).
+and already fitted ramps (the samples in conflict, plus how deep they are in,
+so that the search feels its way out of one), and curvature jumps at joints
+(G2 preferred).
 The search (:func:`evolve`) is adaptive differential evolution (JADE:
 current-to-pbest/1/bin with an archive, ``F`` and ``CR`` adapted from the
 successful trials), one objective call per generation for the whole
@@ -182,6 +184,7 @@ class FitSettings:
     compact_weight: float = 0.02
     patience: int = 30
     conflict_weight: float = 2.0
+    depth_weight: float = 0.25  # per metre a conflicting sample is in, relative to the count
     samples: int = 24
     vectorized: bool = True
     engine: str = "jade"
@@ -315,7 +318,7 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
                               np.ascontiguousarray(s, float),
                               np.ascontiguousarray(np.broadcast_to(z, s.shape), float),
                               np.ascontiguousarray(length, float),
-                              *_obstacle_args(spec, obstacles, settings))
+                              *_obstacle_args(spec, obstacles, settings))[0]
 
 
 def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
@@ -335,7 +338,7 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
         p = x.shape[1]
         za, zb = _column(dec.a[3], p), _column(dec.b[3], p)
         zc = _column(_crest(spec, za, zb), p)
-        length, rmin, turned, kvar, k2, g2, conf = _kernels.spline_terms(
+        length, rmin, turned, kvar, k2, g2, conf, depth = _kernels.spline_terms(
             np.ascontiguousarray(dec.ctrl), m, float(spec.width_m), za, zc, zb,
             g if g > 0 else 1.0, float(settings.transition_m), *kernel_args)
         need = climb_distance(zc - za, g, settings.transition_m) + \
@@ -366,14 +369,14 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
                 spread = spread + (s_att / settings.compact_m) ** 2
         return {"rad_err": rad_err, "smooth": smooth, "shortfall": shortfall, "excess": excess,
                 "spread": spread,
-                "turn_err": turn_err, "g2": g2, "conflicts": conf}
+                "turn_err": turn_err, "g2": g2, "conflicts": conf, "depth": depth}
 
     def f(x: np.ndarray) -> np.ndarray:
         return combine(terms(x))
 
     def combine(t: dict[str, np.ndarray]) -> np.ndarray:
         return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
-                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + settings.conflict_weight * t["conflicts"]
+                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + settings.conflict_weight * (t["conflicts"] + settings.depth_weight * t["depth"])
                 + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2
                 + settings.compact_weight * t["spread"])
 

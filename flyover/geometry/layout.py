@@ -56,9 +56,22 @@ Layout
   ramps (a stack's right turn, fixed at both ends) before the flyovers.
 
 Ramps are fitted one by one (parents first) by :func:`flyover.geometry.fit.fit_ramp`,
-avoiding same-level conflicts with roads and the ramps already fitted; a ramp
-that still conflicts is lifted to the next level (a flyover), and a ramp that
-misses its targets is resampled (Algorithm 1) through ``resampler``.
+avoiding same-level conflicts with roads and the ramps already fitted:
+
+1. a ramp that still conflicts is lifted to the next level (a flyover);
+2. one that misses its targets is fitted again with straight leads (a ramp
+   that climbs may first run along its parent's heading, as long as the climb
+   from that end takes: up beside its road before it turns over the other
+   carriageway), then with other seeds (``restarts``);
+3. one that still meets fitted ramps at its level makes way (rip-up and
+   reroute): each ramp it meets, if nothing is attached to it yet and it is
+   not its parent, is fitted again on its own targets with the new ramp's
+   curve as an obstacle and kept only if it meets them without conflict;
+   then the new ramp is counted again and, if it still conflicts, refitted;
+4. a ramp that misses its targets after all that is resampled (Algorithm 1)
+   through ``resampler``; what still misses is recorded with the reason.
+
+All of this is "the first try" as long as the targets are the sampled ones.
 """
 
 from __future__ import annotations
