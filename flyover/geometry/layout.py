@@ -128,7 +128,7 @@ class LayoutSettings:
     leads: bool = True
     lead_min_m: float = 60.0
     max_resamples: int = 3
-    restarts: int = 1
+    restarts: int = 2
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
@@ -795,13 +795,15 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
     """Fit; while the ramp meets something at its level, lift its crest one level.
 
     The first fits have no leads; a ramp that still misses its targets is fitted
-    again with its straight leads (:meth:`_Builder._leads`), then with other seeds
-    (``restarts`` in all)."""
+    again (``restarts`` times in all) with its straight leads
+    (:meth:`_Builder._leads`), then also with one more Bézier piece (a turn one
+    cubic cannot bend evenly enough for its radius), then with other seeds."""
     st = b.st
     evals, secs = 0, 0.0
     obst = b.obstacles()
     tried = []
-    restarts = [spec] if any(spec.leads()) else []
+    more = replace(spec, pieces=spec.pieces + 1)
+    restarts = [spec, more] if any(spec.leads()) else [more]
     spec = replace(spec, lead_m=(None, None))
     while True:
         fit = fit_ramp(spec, obst, st.fit, seed=seed)
@@ -816,7 +818,7 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
     restarts += [spec] * st.restarts
-    for k, again in enumerate(restarts[:st.restarts]):  # same targets: leads, another seed
+    for k, again in enumerate(restarts[:st.restarts]):  # same targets, other shapes/seeds
         if best.ok or _systematic(best):
             break
         fit = fit_ramp(replace(again, z_crest=best.spec.z_crest), obst, st.fit,
