@@ -376,3 +376,25 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     ic = build_interchange(t, lanes, feats, seed=774928367)
     r_l = next(o for o in ic.outcomes if o.ramp == "rL")
     assert r_l.fit.conflicts > 0 and "with rA2" in r_l.infeasible
+
+
+def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece(monkeypatch):
+    from flyover.geometry import layout  # noqa: PLC0415
+
+    t = catalog_topologies()["parclo_adjacent"]
+    feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
+    feats["oA1"] = RampFeatures(5000.0, 4.0)  # cannot be met: every restart is used
+    seen = []
+    real = layout.fit_ramp
+
+    def spy(spec, obstacles, settings, seed=0):
+        if spec.id == "oA1":
+            seen.append((spec.pieces, any(spec.leads()), seed))
+        return real(spec, obstacles, settings, seed=seed)
+
+    monkeypatch.setattr(layout, "fit_ramp", spy)
+    build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
+                      settings=LayoutSettings(restarts=3, max_resamples=0))
+    n = seen[0][0]
+    assert [(p, lead) for p, lead, _ in seen] == [(n, False), (n, True), (n + 1, True), (n, False)]
+    assert len({s for *_, s in seen}) == 4  # each with its own seed

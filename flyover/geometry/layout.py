@@ -62,7 +62,8 @@ avoiding same-level conflicts with roads and the ramps already fitted:
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb
    from that end takes: up beside its road before it turns over the other
-   carriageway), then with other seeds (``restarts``);
+   carriageway), then also with one more Bézier piece, then with other seeds
+   (``restarts`` fits in all);
 3. one that still meets fitted ramps at its level makes way (rip-up and
    reroute): each ramp it meets, if nothing is attached to it yet and it is
    not its parent, is fitted again on its own targets with the new ramp's
@@ -128,7 +129,7 @@ class LayoutSettings:
     leads: bool = True
     lead_min_m: float = 60.0
     max_resamples: int = 3
-    restarts: int = 2
+    restarts: int = 3
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
