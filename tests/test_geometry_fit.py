@@ -214,3 +214,45 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
         assert got[6][0] == int(hit.sum())
         # deep in a band that covers the plane: the way out is up or down
         assert got[7][0] == pytest.approx((5.5 - np.abs(z[i][hit] - zl)).sum(), rel=1e-9)
+
+
+def test_objective_terms_follow_their_definition_on_the_decoded_curves():
+    """The compiled terms equal the objective's definition computed in numpy from the
+    decoded control points (flyover across a road, so the crest and conflicts count)."""
+    from flyover.geometry import _kernels
+    from flyover.geometry.fit import _decode, bounds, ramp_objective
+    from flyover.geometry.profile import climb_distance
+
+    a = Rail.line("A1", "Out-R", (0, -2), 0.0, 0.0, -7.5, -900, -60)
+    b = Rail.line("B1", "In-R", (2, 0), np.pi / 2, 6.5, -7.5, 60, 900)
+    road = np.array([[-2.0, 0.0, 0.0, -1.0, -1e5, 1e5, -7.5, 0.0, 6.5]])
+    settings = FitSettings()
+    spec = RampSpec("fly", a, b, None, np.pi / 2, 2, W, 150.0, 3.0, z_crest=13.0)
+    lo, hi = np.array(bounds(spec)).T
+    x = lo[:, None] + (hi - lo)[:, None] * np.random.default_rng(5).random((len(lo), 30))
+    f, terms = ramp_objective(spec, Obstacles(road), settings)
+    t = terms(x)
+
+    dec = _decode(spec, x)
+    ref = sample_spline(dec.ctrl, settings.samples)
+    za, zb = dec.a[3], dec.b[3]
+    zc = np.maximum(np.maximum(za, zb), 13.0)
+    need = climb_distance(zc - za, 0.03, 40.0) + climb_distance(zc - zb, 0.03, 40.0)
+    rmin = lane_radius(ref.curvature, W).min(-1)
+    assert np.allclose(t["rad_err"], (rmin - 150.0) / 150.0, rtol=1e-9)
+    assert np.allclose(t["smooth"], ref.curvature.var(-1) * 150.0 ** 2, rtol=1e-6, atol=1e-9)
+    assert np.allclose(t["shortfall"], np.clip(need - ref.length, 0, None) / need, rtol=1e-9)
+    l_ref = 1.2 * np.maximum(need, 150.0 * np.abs(dec.turn) + 80.0)
+    assert np.allclose(t["excess"], np.clip(ref.length / l_ref - 1, 0, None), atol=1e-12)
+    assert np.all(t["conflicts"] >= 0) and np.all((t["conflicts"] > 0) == (t["depth"] > 0))
+    assert not t["spread"].any()  # no free end
+    # the energy weighs the terms as documented
+    e = (100 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20 * t["shortfall"] ** 2
+         + 10 * np.clip(t["turn_err"] - 0.05, 0, None)
+         + settings.conflict_weight * (t["conflicts"] + settings.depth_weight * t["depth"])
+         + 0.01 * np.minimum(t["g2"], 10) + 2 * t["excess"] ** 2)
+    assert np.allclose(f(x), e, rtol=1e-12)
+    ok = ((np.abs(t["rad_err"]) < settings.accept_radius) & (t["shortfall"] == 0)
+          & (t["turn_err"] < 0.05) & (t["conflicts"] == 0) & (t["excess"] < 0.3))
+    assert np.array_equal(f.acceptable(f.table(x)), ok)
+    assert set(_kernels.TERMS) == set(t)

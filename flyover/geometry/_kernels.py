@@ -325,3 +325,102 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z,
         poses[0, 0, p], poses[0, 1, p], poses[0, 2, p], poses[0, 3, p] = xa, ya, ha, za
         poses[1, 0, p], poses[1, 1, p], poses[1, 2, p], poses[1, 3, p] = xb, yb, hb, zb
     return ctrl, stations, poses, turn
+
+
+#: rows of :func:`objective_terms` (the penalty terms of the ramp objective)
+TERMS = ("rad_err", "smooth", "shortfall", "excess", "spread", "turn_err", "g2", "conflicts",
+         "depth")
+
+
+@njit(cache=True, inline="always")
+def _climb_distance(h, grade, transition):  # pragma: no cover - compiled
+    """Horizontal distance to climb ``|h|`` (see profile.climb_distance)."""
+    h = abs(h)
+    if h <= 0.0:
+        return 0.0
+    return h / grade + min(transition, h / grade)
+
+
+@njit(cache=True, nogil=True)
+def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
+                    z_crest, m, width, grade, transition, r_target, inf_ref, compact_m,
+                    spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
+                    x0, y0, cell, nx, ny):  # pragma: no cover - compiled
+    """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
+
+    :func:`decode` then :func:`spline_terms`, then per candidate: radius error
+    (relative; 0 for an ``inf`` target), smoothness (curvature variance times
+    the target radius², or mean curvature² times ``inf_ref``² for ``inf``),
+    the slope shortfall (length missing to climb at ``grade``, relative; for a
+    level ramp (``grade`` 0) 1 when its ends differ in height), excess length
+    over a reference, the pull of stubs toward the centre (``spread_a/b``: the
+    start / end station counts), the turn error, the curvature jumps at joints
+    (scaled like smoothness), conflicting samples and their depth. The crest is
+    the higher end or ``z_crest`` (``-inf``: none).
+    """
+    ctrl, st, poses, turn = decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off,
+                                   free_mode, free_z, leads)
+    p_count = x.shape[1]
+    za = poses[0, 3].copy()
+    zb = poses[1, 3].copy()
+    zc = np.maximum(np.maximum(za, zb), z_crest)
+    g = grade if grade > 0 else 1.0
+    length, rmin, turned, kvar, k2, g2, conf, depth = spline_terms(
+        ctrl, m, width, za, zc, zb, g, transition, end_zone, hw, clearance, lines,
+        px, py, pz, phw, starts, x0, y0, cell, nx, ny)
+    out = np.empty((9, p_count))
+    inf_target = np.isinf(r_target)
+    r_eff = min(r_target, inf_ref)
+    for p in range(p_count):
+        if grade > 0:
+            need = _climb_distance(zc[p] - za[p], grade, transition) + \
+                _climb_distance(zc[p] - zb[p], grade, transition)
+            shortfall = max(need - length[p], 0.0) / max(need, 1.0)
+        else:
+            need = 0.0
+            shortfall = 1.0 if abs(za[p] - zb[p]) > 1e-6 else 0.0
+        if inf_target:
+            out[0, p] = 0.0
+            out[1, p] = k2[p] * inf_ref ** 2
+            out[6, p] = g2[p] * inf_ref ** 2
+        else:
+            out[0, p] = (rmin[p] - r_target) / r_target
+            out[1, p] = kvar[p] * r_target ** 2
+            out[6, p] = g2[p] * r_target ** 2
+        chord = 0.0
+        if abs(turn[p]) < 0.3:  # straight-on ramps only
+            chord = np.hypot(poses[1, 0, p] - poses[0, 0, p], poses[1, 1, p] - poses[0, 1, p])
+        l_ref = 1.2 * max(max(need, chord), r_eff * abs(turn[p]) + 2 * transition)
+        out[2, p] = shortfall
+        out[3, p] = max(length[p] / l_ref - 1.0, 0.0)
+        out[4, p] = spread_a * (st[0, p] / compact_m) ** 2 + spread_b * (st[1, p] / compact_m) ** 2
+        out[5, p] = abs(turned[p] - turn[p])
+        out[7, p] = conf[p]
+        out[8, p] = depth[p]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def energy(terms, conflict_weight, depth_weight, compact_weight):  # pragma: no cover
+    """The ramp objective ``(P,)`` from its terms (rows :data:`TERMS`)."""
+    p_count = terms.shape[1]
+    out = np.empty(p_count)
+    for p in range(p_count):
+        out[p] = (100.0 * terms[0, p] ** 2 + 0.05 * terms[1, p] + 20.0 * terms[2, p] ** 2
+                  + 10.0 * max(terms[5, p] - 0.05, 0.0)
+                  + conflict_weight * (terms[7, p] + depth_weight * terms[8, p])
+                  + 0.01 * min(terms[6, p], 10.0) + 2.0 * terms[3, p] ** 2
+                  + compact_weight * terms[4, p])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def acceptable(terms, accept_radius):  # pragma: no cover - compiled
+    """Candidates meeting the targets on these samples: radius, length, turn, no conflict,
+    excess under 30 %."""
+    p_count = terms.shape[1]
+    out = np.zeros(p_count, np.bool_)
+    for p in range(p_count):
+        out[p] = (abs(terms[0, p]) < accept_radius and terms[2, p] == 0.0
+                  and terms[5, p] < 0.05 and terms[7, p] == 0.0 and terms[3, p] < 0.3)
+    return out

@@ -13,7 +13,7 @@ The vertical profile (:mod:`flyover.geometry.profile`) follows from the plan
 length, so the maximum slope equals its target exactly whenever the ramp is
 long enough; the search makes it long enough.
 
-Objective (whole population at once, numpy): curvature variance + radius
+Objective (whole population at once, compiled: :mod:`flyover.geometry._kernels`): curvature variance + radius
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
 and already fitted ramps (the samples in conflict, plus how deep they are in,
@@ -46,7 +46,7 @@ from scipy.optimize import differential_evolution
 
 from flyover.geometry import _kernels
 from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
-from flyover.geometry.profile import climb_distance, elevation_polys, max_grade
+from flyover.geometry.profile import elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
@@ -303,10 +303,6 @@ def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) 
     return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
 
 
-def _column(v, p: int) -> np.ndarray:
-    return np.ascontiguousarray(np.broadcast_to(np.asarray(v, float), (p,)))
-
-
 def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
                settings: FitSettings) -> np.ndarray:
     """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level."""
@@ -324,65 +320,38 @@ def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
 def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     """The DE objective of ``spec``: ``f(x)`` with ``x`` of shape ``(D, P)`` → ``(P,)``.
 
-    Also returns a function giving the per-candidate terms, for stopping.
+    Also returns a function giving the per-candidate terms (name → ``(P,)``),
+    for stopping and reports. ``f.table(x)`` gives the terms as rows
+    (:data:`_kernels.TERMS`), ``f.energy(table)`` and ``f.acceptable(table)``
+    the energies and which candidates meet the targets; all compiled.
     """
-    m = settings.samples
     g = spec.target_slope_pct / 100.0
-    r_t = spec.target_radius_m
+    stub = spec.free is not None
+    args = (*_rail_args(spec), -np.inf if spec.z_crest is None else float(spec.z_crest),
+            int(settings.samples), float(spec.width_m), float(g), float(settings.transition_m),
+            float(spec.target_radius_m), float(settings.inf_reference_m),
+            float(settings.compact_m),
+            # stubs (a free end: they split or merge later) are pulled gently toward the
+            # centre, so that the ramps joining them stay compact
+            float(stub and spec.start is not None and spec.start.straight),
+            float(stub and spec.end is not None and spec.end.straight),
+            *_obstacle_args(spec, obstacles, settings))
+    weights = (float(settings.conflict_weight), float(settings.depth_weight),
+               float(settings.compact_weight))
 
-    kernel_args = _obstacle_args(spec, obstacles, settings)
-    rails = _rail_args(spec)
+    def table(x: np.ndarray) -> np.ndarray:
+        return _kernels.objective_terms(np.ascontiguousarray(x, float), *args)
 
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
-        dec = _decode(spec, x, rails)
-        p = x.shape[1]
-        za, zb = _column(dec.a[3], p), _column(dec.b[3], p)
-        zc = _column(_crest(spec, za, zb), p)
-        length, rmin, turned, kvar, k2, g2, conf, depth = _kernels.spline_terms(
-            np.ascontiguousarray(dec.ctrl), m, float(spec.width_m), za, zc, zb,
-            g if g > 0 else 1.0, float(settings.transition_m), *kernel_args)
-        need = climb_distance(zc - za, g, settings.transition_m) + \
-            climb_distance(zc - zb, g, settings.transition_m) if g > 0 else 0 * length
-        shortfall = np.clip(need - length, 0, None) / np.maximum(need, 1.0)
-        if g <= 0:
-            shortfall = np.where(np.abs(za - zb) > 1e-6, 1.0, 0.0)
-        turn_err = np.abs(turned - dec.turn)
-        if math.isinf(r_t):
-            rad_err = 0 * length
-            smooth = k2 * settings.inf_reference_m**2
-            g2 = g2 * settings.inf_reference_m**2
-        else:
-            rad_err = (rmin - r_t) / r_t
-            smooth = kvar * r_t**2
-            g2 = g2 * r_t**2
-        r_eff = min(r_t, settings.inf_reference_m)
-        chord = np.hypot(dec.b[0] - dec.a[0], dec.b[1] - dec.a[1])
-        chord = np.where(np.abs(dec.turn) < 0.3, chord, 0.0)  # straight-on ramps only
-        l_ref = 1.2 * np.maximum(np.maximum(need, chord),
-                                 r_eff * np.abs(dec.turn) + 2 * settings.transition_m)
-        excess = np.clip(length / l_ref - 1.0, 0, None)
-        # stubs (a free end: they split or merge later) are pulled gently toward the
-        # centre, so that the ramps joining them stay compact
-        spread = 0 * length
-        for rail, s_att in ((spec.start, dec.sa), (spec.end, dec.sb)):
-            if rail is not None and rail.straight and spec.free is not None:
-                spread = spread + (s_att / settings.compact_m) ** 2
-        return {"rad_err": rad_err, "smooth": smooth, "shortfall": shortfall, "excess": excess,
-                "spread": spread,
-                "turn_err": turn_err, "g2": g2, "conflicts": conf, "depth": depth}
+        return dict(zip(_kernels.TERMS, table(x)))
 
     def f(x: np.ndarray) -> np.ndarray:
-        return combine(terms(x))
+        return _kernels.energy(table(x), *weights)
 
-    def combine(t: dict[str, np.ndarray]) -> np.ndarray:
-        return (100.0 * t["rad_err"] ** 2 + 0.05 * t["smooth"] + 20.0 * t["shortfall"] ** 2
-                + 10.0 * np.clip(t["turn_err"] - 0.05, 0, None) + settings.conflict_weight * (t["conflicts"] + settings.depth_weight * t["depth"])
-                + 0.01 * np.minimum(t["g2"], 10.0) + 2.0 * t["excess"] ** 2
-                + settings.compact_weight * t["spread"])
-
-    f.combine = combine
+    f.table = table
+    f.energy = lambda t: _kernels.energy(t, *weights)
+    f.acceptable = lambda t: _kernels.acceptable(t, float(settings.accept_radius))
     return f, terms
-
 
 
 # -- the search -----------------------------------------------------------------
@@ -496,8 +465,7 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     obstacles = obstacles or Obstacles()
     settings = settings or FitSettings()
-    f, terms = ramp_objective(spec, obstacles, settings)
-    combine = f.combine
+    f, _ = ramp_objective(spec, obstacles, settings)
     b = bounds(spec)
     gen = [0]
     count = [0]
@@ -508,22 +476,17 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     def counted(x: np.ndarray) -> np.ndarray:
         count[0] += x.shape[1]
-        t = terms(x)
-        ok = ((np.abs(t["rad_err"]) < settings.accept_radius) & (t["shortfall"] == 0)
-              & (t["turn_err"] < 0.05) & (t["conflicts"] == 0) & (t["excess"] < 0.3))
-        for j in np.flatnonzero(ok):
+        t = f.table(x)
+        for j in np.flatnonzero(f.acceptable(t)):
             coarse_good.add(np.ascontiguousarray(x[:, j]).tobytes())
-        return combine(t)
+        return f.energy(t)
 
-    _, fine_terms = ramp_objective(spec, obstacles, replace(settings, samples=64))
+    fine, _ = ramp_objective(spec, obstacles, replace(settings, samples=64))
 
     def good(xk: np.ndarray) -> bool:
         if np.ascontiguousarray(xk, float).tobytes() not in coarse_good:
             return False
-        t = fine_terms(xk[:, None])
-        return bool(np.abs(t["rad_err"][0]) < settings.accept_radius and t["shortfall"][0] == 0
-                    and t["turn_err"][0] < 0.05 and t["conflicts"][0] == 0
-                    and t["excess"][0] < 0.3)
+        return bool(fine.acceptable(fine.table(xk[:, None]))[0])
 
     best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
 
