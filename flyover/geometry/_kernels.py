@@ -78,8 +78,8 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
                 if lat > lo and lat < hi:
                     deep = max(deep, min(dz, lat - lo, hi - lat))
             if px.shape[0] > 0:
-                gx = int((x - x0) // cell)
-                gy = int((y - y0) // cell)
+                gx = int(np.floor((x - x0) / cell))
+                gy = int(np.floor((y - y0) / cell))
                 for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
                     for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
                         c = ix * ny + iy
@@ -178,7 +178,6 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
                     ss[j] = off
         length[p] = off
         mean = 0.0
-        prev = np.arctan2(ty[0], tx[0])
         for j in range(n):
             kj = kap[j]
             mean += kj
@@ -186,10 +185,9 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
             r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
             if r < rmin[p]:
                 rmin[p] = r
-            if j > 0:
-                ang = np.arctan2(ty[j], tx[j])
-                turn[p] += (ang - prev + np.pi) % (2 * np.pi) - np.pi
-                prev = ang
+            if j > 0:  # the heading change from the previous sample
+                turn[p] += np.arctan2(tx[j - 1] * ty[j] - ty[j - 1] * tx[j],
+                                      tx[j - 1] * tx[j] + ty[j - 1] * ty[j])
         mean /= n
         k2[p] /= n
         kvar[p] = k2[p] - mean * mean
@@ -424,3 +422,89 @@ def acceptable(terms, accept_radius):  # pragma: no cover - compiled
         out[p] = (abs(terms[0, p]) < accept_radius and terms[2, p] == 0.0
                   and terms[5, p] < 0.05 and terms[7, p] == 0.0 and terms[3, p] < 0.3)
     return out
+
+
+@njit(cache=True, nogil=True)
+def jade_trial(pop, energy, archive, n_arch, u, mu_cr, mu_f, n_best, lo, hi):  # pragma: no cover
+    """One generation's trial vectors of JADE (current-to-pbest/1/bin with an archive).
+
+    ``u``: uniforms ``(n, d + 9)`` of this generation: CR (Box-Muller, 2), F
+    (Cauchy, twice), p-best, r1, r2, the forced crossover dimension, the
+    crossover mask (``d``), the archive slot (see :func:`jade_select`).
+    Returns the trials ``(n, d)``, their CR ``(n,)`` and F ``(n,)``. A trial
+    leaving the bounds is put halfway between its parent and the bound.
+    """
+    n, d = pop.shape
+    order = np.argsort(energy, kind="mergesort")
+    trial = np.empty((n, d))
+    cr = np.empty(n)
+    fm = np.empty(n)
+    n_union = n + n_arch
+    for i in range(n):
+        c = mu_cr + 0.1 * np.sqrt(-2.0 * np.log1p(-u[i, 0])) * np.cos(2 * np.pi * u[i, 1])
+        cr[i] = min(max(c, 0.0), 1.0)
+        f = mu_f + 0.1 * np.tan(np.pi * (u[i, 2] - 0.5))
+        if f <= 0.0:
+            f = mu_f + 0.1 * np.tan(np.pi * (u[i, 3] - 0.5))
+        f = min(max(f, 0.05), 1.0)
+        fm[i] = f
+        best = order[int(u[i, 4] * n_best)]
+        r1 = (i + 1 + int(u[i, 5] * (n - 1))) % n
+        r2 = int(u[i, 6] * n_union)
+        for _ in range(2):  # r2 differs from i and r1
+            if r2 == i or r2 == r1:
+                r2 = (r2 + 1) % n_union
+        forced = int(u[i, 7] * d)
+        for k in range(d):
+            if u[i, 8 + k] < cr[i] or k == forced:
+                other = pop[r2, k] if r2 < n else archive[r2 - n, k]
+                v = pop[i, k] + f * (pop[best, k] - pop[i, k]) + f * (pop[r1, k] - other)
+                if v < lo[k]:
+                    v = (pop[i, k] + lo[k]) / 2
+                elif v > hi[k]:
+                    v = (pop[i, k] + hi[k]) / 2
+                trial[i, k] = v
+            else:
+                trial[i, k] = pop[i, k]
+    return trial, cr, fm
+
+
+@njit(cache=True, nogil=True)
+def jade_select(pop, energy, trial, e_trial, cr, fm, archive, n_arch, u_slot, mu_cr, mu_f,
+                c):  # pragma: no cover - compiled
+    """Selection and adaptation of one JADE generation (in place on ``pop``, ``energy``,
+    ``archive``).
+
+    A trial at least as good replaces its parent; a parent beaten strictly goes to
+    the archive (a random slot, ``u_slot``, once it holds ``n``). ``CR`` and ``F``
+    move toward the gain-weighted mean / Lehmer mean of the successful ones.
+    Returns the archive's size and the new ``mu_cr``, ``mu_f``.
+    """
+    n, d = pop.shape
+    gain_sum = 0.0
+    count = 0
+    for i in range(n):
+        if e_trial[i] < energy[i]:
+            gain_sum += energy[i] - e_trial[i]
+            count += 1
+    if count > 0:
+        s_cr = 0.0
+        s_f = 0.0
+        s_f2 = 0.0
+        for i in range(n):
+            if e_trial[i] < energy[i]:
+                w = (energy[i] - e_trial[i]) / gain_sum if gain_sum > 0 else 1.0 / count
+                s_cr += w * cr[i]
+                s_f += w * fm[i]
+                s_f2 += w * fm[i] * fm[i]
+                slot = n_arch if n_arch < n else int(u_slot[i] * n)
+                archive[slot] = pop[i]
+                if n_arch < n:
+                    n_arch += 1
+        mu_cr = (1 - c) * mu_cr + c * s_cr
+        mu_f = (1 - c) * mu_f + c * s_f2 / max(s_f, 1e-12)
+    for i in range(n):
+        if e_trial[i] <= energy[i]:
+            pop[i] = trial[i]
+            energy[i] = e_trial[i]
+    return n_arch, mu_cr, mu_f

@@ -373,8 +373,10 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
     ``f`` maps a population ``(D, P)`` to energies ``(P,)`` in one call. ``F``
     and ``CR`` adapt per generation from the successful trials (Zhang &
     Sanderson, IEEE TEC 13(5), 2009; F is truncated to 0.05..1 instead of
-    redrawn); a trial leaving the bounds is put halfway
-    between its parent and the bound. ``init`` rows (decision vectors) replace
+    redrawn; a beaten parent enters the archive, replacing a random member once
+    it holds ``NP``); a trial leaving the bounds is put halfway between its
+    parent and the bound. The generation's arithmetic is compiled
+    (:func:`_kernels.jade_trial`, :func:`_kernels.jade_select`). ``init`` rows (decision vectors) replace
     the first rows of the Latin-hypercube start. After each generation
     ``stop(population, energies, gen)`` may end the search: ``True`` returns
     the best candidate, an index returns that candidate, ``None`` goes on.
@@ -394,49 +396,22 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
     pop = lo + u * span
     energy = np.asarray(f(pop.T), float)
     evals = n
-    archive = np.empty((0, d))
+    archive = np.empty((n, d))
+    n_arch = 0
     mu_cr, mu_f, c = 0.5, 0.5, 0.1
     n_best = max(2, int(round(0.1 * n)))
     gen = 0
     ib = int(np.argmin(energy))
-    idx = np.arange(n)
     while gen < maxiter:
         gen += 1
-        # one block of uniforms per generation: CR (Box-Muller), F (Cauchy, twice),
-        # p-best, r1, r2, crossover mask and the forced crossover dimension
-        u = rng.random((n, d + 8))
-        cr = np.clip(mu_cr + 0.1 * np.sqrt(-2.0 * np.log1p(-u[:, 0])) * np.cos(2 * np.pi * u[:, 1]),
-                     0.0, 1.0)
-        fm = mu_f + 0.1 * np.tan(np.pi * (u[:, 2] - 0.5))
-        fm = np.where(fm <= 0, mu_f + 0.1 * np.tan(np.pi * (u[:, 3] - 0.5)), fm)
-        fm = np.clip(fm, 0.05, 1.0)[:, None]
-        order = np.argsort(energy, kind="stable")
-        pbest = pop[order[(u[:, 4] * n_best).astype(np.int64)]]
-        r1 = (idx + 1 + (u[:, 5] * (n - 1)).astype(np.int64)) % n
-        union = np.vstack([pop, archive]) if len(archive) else pop
-        r2 = (u[:, 6] * len(union)).astype(np.int64)
-        for _ in range(2):  # r2 differs from i and r1
-            r2 = np.where((r2 == idx) | (r2 == r1), (r2 + 1) % len(union), r2)
-        v = pop + fm * (pbest - pop) + fm * (pop[r1] - union[r2])
-        v = np.where(v < lo, (pop + lo) / 2, v)
-        v = np.where(v > hi, (pop + hi) / 2, v)
-        cross = u[:, 8:] < cr[:, None]
-        cross[idx, (u[:, 7] * d).astype(np.int64)] = True
-        trial = np.where(cross, v, pop)
+        # one block of uniforms per generation (see _kernels.jade_trial)
+        u = rng.random((n, d + 9))
+        trial, cr, fm = _kernels.jade_trial(pop, energy, archive, n_arch, u, mu_cr, mu_f,
+                                            n_best, lo, hi)
         e_trial = np.asarray(f(trial.T), float)
         evals += n
-        win = e_trial <= energy
-        better = e_trial < energy
-        if better.any():
-            archive = np.vstack([archive, pop[better]])
-            if len(archive) > n:
-                archive = archive[rng.permutation(len(archive))[:n]]
-            gain = energy[better] - e_trial[better]
-            w = gain / gain.sum() if gain.sum() > 0 else np.full(len(gain), 1 / len(gain))
-            mu_cr = (1 - c) * mu_cr + c * float((w * cr[better]).sum())
-            fs = fm[better, 0]
-            mu_f = (1 - c) * mu_f + c * float((w * fs**2).sum() / max((w * fs).sum(), 1e-12))
-        pop[win], energy[win] = trial[win], e_trial[win]
+        n_arch, mu_cr, mu_f = _kernels.jade_select(pop, energy, trial, e_trial, cr, fm, archive,
+                                                   n_arch, u[:, d + 8], mu_cr, mu_f, c)
         ib = int(np.argmin(energy))
         if stop is not None:
             verdict = stop(pop, energy, gen)
