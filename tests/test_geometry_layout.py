@@ -378,7 +378,7 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     assert r_l.fit.conflicts > 0 and "with rA2" in r_l.infeasible
 
 
-def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece(monkeypatch):
+def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_then_seeds(monkeypatch):
     from flyover.geometry import layout  # noqa: PLC0415
 
     t = catalog_topologies()["parclo_adjacent"]
@@ -394,7 +394,8 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece(m
 
     monkeypatch.setattr(layout, "fit_ramp", spy)
     build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
-                      settings=LayoutSettings(restarts=3, max_resamples=0))
+                      settings=LayoutSettings(restarts=4, max_resamples=0))
     n = seen[0][0]
-    assert [(p, lead) for p, lead, _ in seen] == [(n, False), (n, True), (n + 1, True), (n, False)]
-    assert len({s for *_, s in seen}) == 4  # each with its own seed
+    assert [(p, lead) for p, lead, _ in seen] == [(n, False), (n, True), (n + 1, True),
+                                                  (n + 1, False), (n, False)]
+    assert len({s for *_, s in seen}) == 5  # each with its own seed

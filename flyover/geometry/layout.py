@@ -62,8 +62,8 @@ avoiding same-level conflicts with roads and the ramps already fitted:
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb
    from that end takes: up beside its road before it turns over the other
-   carriageway), then also with one more Bézier piece, then with other seeds
-   (``restarts`` fits in all);
+   carriageway), then also with one more Bézier piece, then with one more
+   piece but no leads, then with other seeds (``restarts`` fits in all);
 3. one that still meets fitted ramps at its level makes way (rip-up and
    reroute): each ramp it meets, if nothing is attached to it yet and it is
    not its parent, is fitted again on its own targets with the new ramp's
@@ -129,7 +129,7 @@ class LayoutSettings:
     leads: bool = True
     lead_min_m: float = 60.0
     max_resamples: int = 3
-    restarts: int = 3
+    restarts: int = 5
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
@@ -798,13 +798,15 @@ def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, i
     The first fits have no leads; a ramp that still misses its targets is fitted
     again (``restarts`` times in all) with its straight leads
     (:meth:`_Builder._leads`), then also with one more Bézier piece (a turn one
-    cubic cannot bend evenly enough for its radius), then with other seeds."""
+    cubic cannot bend evenly enough for its radius), then with one more piece
+    but no leads, then with other seeds."""
     st = b.st
     evals, secs = 0, 0.0
     obst = b.obstacles()
     tried = []
     more = replace(spec, pieces=spec.pieces + 1)
-    restarts = [spec, more] if any(spec.leads()) else [more]
+    plain_more = replace(more, lead_m=(None, None))
+    restarts = [spec, more, plain_more] if any(spec.leads()) else [more]
     spec = replace(spec, lead_m=(None, None))
     while True:
         fit = fit_ramp(spec, obst, st.fit, seed=seed)

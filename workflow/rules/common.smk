@@ -115,7 +115,8 @@ def export_outputs(wildcards):
 
 # -- geometry stage (workflow/rules/geometry.smk) --------------------------------
 # 3: straight leads on climbing ramps (geometry.leads)
-GEOMETRY_VERSION = 3
+# 4: compiled DE generation step (other random trajectories), restarts 5
+GEOMETRY_VERSION = 4
 
 
 def _features_buildable(class_id):
