@@ -465,16 +465,13 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
 
-    def stop(pop: np.ndarray, energy: np.ndarray, generation: int):
-        gen[0] = generation
-        fun = float(energy.min())
-        if fun < best[0] - 0.01 * abs(best[0]) or not np.isfinite(best[0]):
-            best[0], best[1] = fun, generation
-        elif settings.patience and generation - best[1] >= settings.patience:
-            return True  # stagnated: more generations will not meet the targets
-        if generation < settings.min_generations or not coarse_good:
-            return None
-        # the lowest-energy candidate that meets the targets on fine samples
+    # an ``inf`` radius asks for the gentlest curve the ends allow: smoothing goes on until
+    # the search stagnates, then the best candidate meeting the targets is taken
+    gentlest = math.isinf(spec.target_radius_m)
+
+    def chosen(pop: np.ndarray, energy: np.ndarray) -> int | None:
+        """The lowest-energy candidate that meets the targets on fine samples (of the
+        best three that met them on coarse samples)."""
         tried = 0
         for j in np.argsort(energy, kind="stable"):
             if np.ascontiguousarray(pop[j]).tobytes() in coarse_good:
@@ -484,6 +481,19 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
                 if tried == 3:
                     break
         return None
+
+    def stop(pop: np.ndarray, energy: np.ndarray, generation: int):
+        gen[0] = generation
+        fun = float(energy.min())
+        if fun < best[0] - 0.01 * abs(best[0]) or not np.isfinite(best[0]):
+            best[0], best[1] = fun, generation
+        elif settings.patience and generation - best[1] >= settings.patience:
+            # stagnated: more generations will not meet the targets (or smooth further)
+            j = chosen(pop, energy) if gentlest and coarse_good else None
+            return True if j is None else j
+        if generation < settings.min_generations or not coarse_good or gentlest:
+            return None
+        return chosen(pop, energy)
 
     def scipy_stop(intermediate_result) -> bool:  # scipy passes the result by this name
         x = intermediate_result.x
