@@ -12,12 +12,16 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
   scipy's plain (one call per candidate) DE on the same objective and with
   the same stopping rule, i.e. at equal accuracy.
 
-Run: ``OMP_NUM_THREADS=1 .venv/bin/python benchmarks/geometry.py --samples 3``
+Run: ``OMP_NUM_THREADS=1 .venv/bin/python benchmarks/geometry.py --samples 3``;
+the whole catalog city as the workflow samples it, one process per core:
+``.venv/bin/python benchmarks/geometry.py --from-results --samples 0 --jobs 2``
+(times are each interchange's CPU seconds in its own single-threaded process).
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
 import time
 from dataclasses import replace
@@ -59,6 +63,25 @@ def drawn_feature_sets(topology, profile, n, seed):
     return out
 
 
+#: what the workers build from (set before they fork): class id → (design, topology, sets)
+_WORK: dict = {}
+
+
+def _build(job: tuple[str, int]) -> tuple:
+    """Build one interchange; its CPU seconds, geometry rows and fits."""
+    cid, sample = job
+    name, topo, sets, seed, settings, keep = _WORK[cid]
+    t0 = time.process_time()
+    ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
+                      settings=settings,
+                      resampler=domain_resampler(sets, sample_seed(seed, cid, sample)))
+    secs = time.process_time() - t0
+    if keep:
+        out = keep / cid / str(sample)
+        write_sample(ic, out / "geometry.json", out / "geometry.parquet")
+    return name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=3)
@@ -70,12 +93,16 @@ def main() -> None:
                          "--samples 0")
     ap.add_argument("--keep", type=Path, metavar="DIR",
                     help="write DIR/{class_id}/{sample}/geometry.json (as the workflow does)")
+    ap.add_argument("--jobs", type=int, default=1,
+                    help="worker processes (one per core; each interchange is timed in its "
+                         "worker)")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
     settings = LayoutSettings.from_config(cfg["geometry"])
     profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
     seed = int(cfg["seed"])
     rows, per_ic, names, fits = [], [], {}, []
+    jobs = []
     for name, topo in catalog_topologies().items():
         if args.designs and name not in args.designs:
             continue
@@ -85,18 +112,23 @@ def main() -> None:
             sets = read_feature_sets(f"results/features/{cid}.parquet")
         else:
             sets = drawn_feature_sets(topo, profile, args.samples, seed)
-        for sample, fs in sorted(sets.items())[: args.samples or None]:
-            t0 = time.process_time()
-            ic = build_sample(topo, fs, class_id=cid, sample=sample, seed=seed, settings=settings,
-                              resampler=domain_resampler(sets, sample_seed(seed, cid, sample)))
-            per_ic.append(time.process_time() - t0)
-            rows += geometry_rows(ic)
-            if args.keep:
-                out = args.keep / cid / str(sample)
-                write_sample(ic, out / "geometry.json", out / "geometry.parquet")
-            fits += [o.fit for o in ic.outcomes]
-            print(f"{name} sample {sample}: {sum(o.fit.ok for o in ic.outcomes)}/"
-                  f"{len(ic.outcomes)} ramps ok, {per_ic[-1]:.2f} s", flush=True)
+        _WORK[cid] = (name, topo, sets, seed, settings, args.keep)
+        jobs += [(cid, sample) for sample in sorted(sets)[: args.samples or None]]
+    if args.jobs > 1:
+        pool = multiprocessing.get_context("fork").Pool(args.jobs)
+        done = pool.imap(_build, jobs)
+    else:
+        pool, done = None, map(_build, jobs)
+    by_design: dict[str, list[float]] = {}
+    for name, sample, secs, ic_rows, ic_fits in done:
+        per_ic.append(secs)
+        by_design.setdefault(name, []).append(secs)
+        rows += ic_rows
+        fits += ic_fits
+        print(f"{name} sample {sample}: {sum(f.ok for f in ic_fits)}/"
+              f"{len(ic_fits)} ramps ok, {secs:.2f} s", flush=True)
+    if pool is not None:
+        pool.close()
     print("\nclass (design)                 ramps  first-try-ok  resampled  ok  infeasible  conflict")
     tot = dict(ramps=0, first_try_ok=0, resampled=0, ok=0, infeasible=0, conflicts=0)
     for s in summary(rows):
@@ -112,6 +144,9 @@ def main() -> None:
     ramp_s = np.array([r["seconds"] for r in rows])  # all DE runs of the ramp
     print(f"\nper interchange (CPU s): median {np.median(per_ic):.3f}  p95 "
           f"{np.percentile(per_ic, 95):.3f}  (n={len(per_ic)})")
+    for name, secs in sorted(by_design.items()):
+        print(f"  {name:<17} median {np.median(secs):.3f}  p95 {np.percentile(secs, 95):.3f}  "
+              f"max {max(secs):.2f}  (n={len(secs)})")
     print(f"per ramp incl. restarts/lifts/resamples, vectorised DE (wall s): median {np.median(ramp_s):.3f}  p95 "
           f"{np.percentile(ramp_s, 95):.3f}  (n={len(ramp_s)})")
     rng = np.random.default_rng(0)
