@@ -121,6 +121,33 @@ def test_a_flyover_climbs_along_its_road_on_a_straight_lead_before_it_turns():
     assert conflicts_with(fit, obst, FitSettings()) == {}
 
 
+def test_inf_radius_turn_is_the_gentlest_curve_and_never_tighter_than_the_floor():
+    spec = _right_turn(math.inf, 3.0)
+    fit = fit_ramp(spec, seed=2)
+    _check_ends(fit)
+    rmin, smax = _measured(fit)
+    # far gentler than the tightest radius a finite target could ask for
+    assert rmin > 3 * spec.inf_floor_m and fit.radius_ok and fit.ok
+    assert abs(smax - 3.0) <= 0.2
+    # a kink (or any curve tighter than the floor) is no "straight" ramp
+    assert not replace(fit, min_radius_m=0.95 * spec.inf_floor_m - 0.1).radius_ok
+    assert replace(fit, min_radius_m=spec.inf_floor_m).radius_ok
+
+
+def test_inf_radius_candidates_below_the_floor_are_penalised_and_not_acceptable():
+    from flyover.geometry.fit import _decode, bounds, ramp_objective
+
+    spec = replace(_right_turn(math.inf, 3.0), inf_floor_m=400.0)
+    lo, hi = np.array(bounds(spec)).T
+    x = lo[:, None] + (hi - lo)[:, None] * np.random.default_rng(1).random((len(lo), 40))
+    f, terms = ramp_objective(spec, Obstacles(), FitSettings())
+    t = terms(x)
+    rmin = lane_radius(sample_spline(_decode(spec, x).ctrl, 24).curvature, W).min(-1)
+    assert np.allclose(t["rad_err"], np.minimum(rmin - 400.0, 0.0) / 400.0, rtol=1e-9)
+    below = rmin < 0.98 * 400.0
+    assert below.any() and not f.acceptable(f.table(x))[below].any()
+
+
 def test_same_level_ramp_cannot_meet_a_slope_and_says_so():
     a = Rail.line("A1", "Out-R", (0, 0), 0.0, 0.0, -15.0, -600, -200)
     b = Rail.line("A1", "In-R", (0, 0), 0.0, 0.0, -15.0, 200, 600)

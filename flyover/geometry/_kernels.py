@@ -341,13 +341,14 @@ def _climb_distance(h, grade, transition):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
-                    z_crest, m, width, grade, transition, r_target, inf_ref, compact_m,
+                    z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
                     x0, y0, cell, nx, ny):  # pragma: no cover - compiled
     """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
-    (relative; 0 for an ``inf`` target), smoothness (curvature variance times
+    (relative; for an ``inf`` target, how far it falls short of ``inf_floor``,
+    relative, else 0), smoothness (curvature variance times
     the target radius², or mean curvature² times ``inf_ref``² for ``inf``),
     the slope shortfall (length missing to climb at ``grade``, relative; for a
     level ramp (``grade`` 0) 1 when its ends differ in height), excess length
@@ -378,7 +379,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
             need = 0.0
             shortfall = 1.0 if abs(za[p] - zb[p]) > 1e-6 else 0.0
         if inf_target:
-            out[0, p] = 0.0
+            out[0, p] = min(rmin[p] - inf_floor, 0.0) / inf_floor
             out[1, p] = k2[p] * inf_ref ** 2
             out[6, p] = g2[p] * inf_ref ** 2
         else:

@@ -30,9 +30,12 @@ benchmark's reference).
 
 Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
 of the reference line). A target of ``inf`` on a ramp that has to turn means
-*no minimum-radius constraint*: the ramp is fitted as the gentlest curve its
-ends allow (curvature² is minimised instead of matching a radius) and its
-radius always counts as within tolerance.
+*no radius to match*: the ramp is fitted as the gentlest curve its ends allow
+(curvature² is minimised instead of matching a radius), and its radius counts
+as within tolerance when it is no tighter than :attr:`RampSpec.inf_floor_m`
+(the tightest radius of the feature domain, 30 m in the paper's profile; 5 %
+tolerance like a finite target) — a gentlest curve with a kink in it is no
+straight ramp.
 """
 
 from __future__ import annotations
@@ -158,6 +161,8 @@ class RampSpec:
     #: longest straight lead (m) at the start / end, where the ramp runs along its
     #: parent's heading before it turns (e.g. climbing beside it); ``None``: no lead
     lead_m: tuple[float | None, float | None] = (None, None)
+    #: an ``inf`` radius target: the lane-centre radius is never below this (m)
+    inf_floor_m: float = 30.0
 
     def leads(self) -> tuple[bool, bool]:
         """Whether the start / end has a lead (only attached ends have one; both or neither)."""
@@ -212,7 +217,9 @@ class RampFit:
     @property
     def radius_ok(self) -> bool:
         t = self.spec.target_radius_m
-        return math.isinf(t) or abs(self.min_radius_m - t) <= 0.05 * t
+        if math.isinf(t):
+            return self.min_radius_m >= 0.95 * self.spec.inf_floor_m
+        return abs(self.min_radius_m - t) <= 0.05 * t
 
     @property
     def slope_ok(self) -> bool:
@@ -330,6 +337,7 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     args = (*_rail_args(spec), -np.inf if spec.z_crest is None else float(spec.z_crest),
             int(settings.samples), float(spec.width_m), float(g), float(settings.transition_m),
             float(spec.target_radius_m), float(settings.inf_reference_m),
+            float(spec.inf_floor_m),
             float(settings.compact_m),
             # stubs (a free end: they split or merge later) are pulled gently toward the
             # centre, so that the ramps joining them stay compact

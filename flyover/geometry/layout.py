@@ -130,6 +130,7 @@ class LayoutSettings:
     lead_min_m: float = 60.0
     max_resamples: int = 3
     restarts: int = 5
+    inf_min_radius_m: float = 30.0
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
@@ -654,7 +655,8 @@ class _Builder:
         b = self._rail(ramp, end, False, loop, width, extra_b) if end else None
         crest = self.plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
-                        float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat))
+                        float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat),
+                        inf_floor_m=float(st.inf_min_radius_m))
 
     def _leads(self, start, end, crest, free, feat: RampFeatures) -> tuple:
         """Longest straight leads of a ramp that climbs: each attached end may run
@@ -951,7 +953,10 @@ def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
                          f"{sp.target_slope_pct:g} % slope")
         else:
             parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
-    if not fit.radius_ok:
+    if not fit.radius_ok and math.isinf(sp.target_radius_m):
+        parts.append(f"radius: {fit.min_radius_m:.1f} m, tighter than the {sp.inf_floor_m:g} m "
+                     f"an inf target allows")
+    elif not fit.radius_ok:
         parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
     if fit.conflicts:
         with_ = ", ".join(f"{k} ({n})" for k, n in sorted((met or {}).items()))
