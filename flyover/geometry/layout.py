@@ -851,7 +851,11 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         Ramp id → :class:`RampFeatures` (targets).
     resampler
         ``(ramp, attempt) → RampFeatures`` drawing new targets for a ramp that
-        misses its targets (Algorithm 1); ``None`` disables resampling.
+        misses its targets (Algorithm 1); ``None`` disables resampling. If it
+        also has a method ``clearing(ramp, attempt)`` (as
+        :class:`flyover.geometry.tables.DomainResampler`), a ramp that still meets
+        something at its level after that is resampled with its draws (the
+        steepest slope), up to ``max_resamples`` times more.
 
     Raises
     ------
@@ -888,6 +892,22 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         if fit.conflicts and attempts:  # on the last targets too
             fit, e2, s2 = _reroute(b, ramp, fit, rseed + attempts, outcomes)
             evals, secs = evals + e2, secs + s2
+        # still crossing something at its level: a crossing is never acceptable, so draw
+        # targets that clear it soonest (the steepest slope of the domain)
+        clearing = getattr(resampler, "clearing", None)
+        k = 0
+        while fit.conflicts and clearing is not None and k < st.max_resamples:
+            k += 1
+            new = clearing(ramp, k)
+            if new is None:
+                break
+            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + 7 * k + 101)
+            evals, secs = evals + e2, secs + s2
+            if fit2.conflicts:
+                fit2, e2, s2 = _reroute(b, ramp, fit2, rseed + 7 * k + 102, outcomes)
+                evals, secs = evals + e2, secs + s2
+            attempts += 1
+            fit = min([fit, fit2], key=lambda f: (f.conflicts, not f.ok))
         met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
         reason = "" if fit.ok else _reason(fit, met)
         b.record(ramp, fit)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import os
 import zlib
+from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
@@ -25,7 +26,8 @@ from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
 from flyover.topology.tables import write_parquet
 
-__all__ = ["GEOMETRY_SCHEMA", "FeatureSet", "read_feature_sets", "sample_seed", "domain_resampler",
+__all__ = ["GEOMETRY_SCHEMA", "FeatureSet", "read_feature_sets", "sample_seed", "DomainResampler",
+           "domain_resampler",
            "build_sample", "geometry_rows", "write_sample", "merge_tables", "summary"]
 
 log = logging.getLogger(__name__)
@@ -76,8 +78,45 @@ def sample_seed(seed: int, class_id: str, sample: int) -> int:
     return zlib.crc32(f"{seed}/{class_id}/{sample}".encode())
 
 
-def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int):
+@dataclass(frozen=True)
+class DomainResampler:
     """Algorithm 1's resampling: new targets drawn from the class's feature domain.
+
+    Called as ``resampler(ramp, attempt)``. ``radii``/``slopes`` are the values
+    to draw from; ``level`` the ramps whose slope is fixed at 0 (they keep it).
+    Deterministic: each draw is seeded by ``seed``, the ramp and the attempt.
+    """
+
+    radii: tuple[float, ...]
+    slopes: tuple[float, ...]
+    level: frozenset[str]
+    seed: int
+
+    def _rng(self, ramp: str, attempt: int, *salt: int) -> np.random.Generator:
+        return np.random.default_rng([self.seed, zlib.crc32(ramp.encode()), attempt, *salt])
+
+    def __call__(self, ramp: str, attempt: int) -> RampFeatures | None:
+        if not self.radii or not (self.slopes or ramp in self.level):
+            return None
+        rng = self._rng(ramp, attempt)
+        radius = float(rng.choice(self.radii))
+        if ramp in self.level:
+            return RampFeatures(radius, LEVEL_SLOPE_PCT)
+        return RampFeatures(radius, float(rng.choice(self.slopes)))
+
+    def clearing(self, ramp: str, attempt: int) -> RampFeatures | None:
+        """Targets for a ramp that still meets something at its own level after
+        resampling: the steepest slope of the domain (it climbs over, or dives
+        under, what it meets in the shortest distance) with a radius drawn as usual;
+        ``None`` for a level ramp (no slope can help it)."""
+        if not self.radii or not self.slopes or ramp in self.level:
+            return None
+        radius = float(self._rng(ramp, attempt, 1).choice(self.radii))
+        return RampFeatures(radius, max(self.slopes))
+
+
+def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> DomainResampler:
+    """The :class:`DomainResampler` of a class's feature sets.
 
     The domain is the set of radius and slope values that occur for ramps in
     the class's feature sets (i.e. the configured domain as sampled). A ramp
@@ -91,17 +130,7 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int):
                                      for ramps in sets if r in ramps)}
     radii = sorted({f.radius_m for ramps in sets for f in ramps.values()})
     slopes = sorted({f.slope_pct for ramps in sets for r, f in ramps.items() if r not in level})
-
-    def draw(ramp: str, attempt: int) -> RampFeatures | None:
-        if not radii or not (slopes or ramp in level):
-            return None
-        rng = np.random.default_rng([seed, zlib.crc32(ramp.encode()), attempt])
-        radius = float(rng.choice(radii))
-        if ramp in level:
-            return RampFeatures(radius, LEVEL_SLOPE_PCT)
-        return RampFeatures(radius, float(rng.choice(slopes)))
-
-    return draw
+    return DomainResampler(tuple(radii), tuple(slopes), frozenset(level), int(seed))
 
 
 def build_sample(topology: Topology, features: FeatureSet, *, class_id: str, sample: int,
