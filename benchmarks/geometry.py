@@ -33,6 +33,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from flyover.config import load_config  # noqa: E402
+from flyover.geometry.check import same_level_conflicts  # noqa: E402
 from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
 from flyover.geometry.tables import (  # noqa: E402
@@ -79,7 +80,8 @@ def _build(job: tuple[str, int]) -> tuple:
     if keep:
         out = keep / cid / str(sample)
         write_sample(ic, out / "geometry.json", out / "geometry.parquet")
-    return name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes]
+    dense = same_level_conflicts(ic.geometry)  # the independent check, not timed
+    return name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes], dense
 
 
 def main() -> None:
@@ -120,7 +122,13 @@ def main() -> None:
     else:
         pool, done = None, map(_build, jobs)
     by_design: dict[str, list[float]] = {}
-    for name, sample, secs, ic_rows, ic_fits in done:
+    dense_bad: dict[str, int] = {}
+    for name, sample, secs, ic_rows, ic_fits, dense in done:
+        if dense:
+            dense_bad[name] = dense_bad.get(name, 0) + 1
+            print(f"{name} sample {sample}: same-level conflicts (dense check): "
+                  + ", ".join(f"{c.ramp}/{c.other} at {c.s_m:.0f} m ({c.length_m:.1f} m)"
+                              for c in dense))
         per_ic.append(secs)
         by_design.setdefault(name, []).append(secs)
         rows += ic_rows
@@ -141,6 +149,8 @@ def main() -> None:
     print(f"first try within tolerance: {100 * tot['first_try_ok'] / tot['ramps']:.1f} %; "
           f"ok or recorded infeasible: "
           f"{100 * sum(r['ok'] or bool(r['infeasible']) for r in rows) / len(rows):.1f} %")
+    print(f"interchanges with a same-level conflict, dense check (lane centres <= 1 m apart, "
+          f"flyover.geometry.check): {sum(dense_bad.values())} of {len(per_ic)} {dense_bad or ''}")
     ramp_s = np.array([r["seconds"] for r in rows])  # all DE runs of the ramp
     print(f"\nper interchange (CPU s): median {np.median(per_ic):.3f}  p95 "
           f"{np.percentile(per_ic, 95):.3f}  (n={len(per_ic)})")

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
-from flyover.geometry.fit import FitSettings, Obstacles, Rail, RampSpec, conflicts_with, fit_ramp
+from flyover.geometry.fit import (FitSettings, Obstacles, Rail, RampSpec, conflicts_with,
+                                  fit_ramp, measure)
 from flyover.geometry.profile import evaluate_polys, max_grade
 
 W = 4.0
@@ -111,14 +112,13 @@ def test_a_flyover_climbs_along_its_road_on_a_straight_lead_before_it_turns():
     assert 1.0 <= lead[3, 0] - lead[0, 0] <= 400.0
     tail = fit.ctrl[-1]
     assert np.allclose(tail[:, 0], tail[3, 0], atol=1e-9)  # straight, along B1's heading
-    # without leads one cubic turns too early: it meets A2 before it has climbed
-    for seed in range(3):
-        plain = fit_ramp(replace(spec, lead_m=(None, None)), obst, seed=seed)
-        assert plain.ctrl.shape[0] == 1 and not plain.ok
-        # it is A2 it meets, with as many samples as the search counted
-        met = conflicts_with(plain, obst, FitSettings())
-        assert list(met) == ["road 0"] and met["road 0"] == plain.conflicts
     assert conflicts_with(fit, obst, FitSettings()) == {}
+    # one cubic that turns at once meets A2 before it has climbed: it is A2 it meets,
+    # with as many samples as the search counts
+    plain = replace(spec, lead_m=(None, None))
+    early = measure(plain, np.array([2.5, 300.0, 0.3, 0.3]), obst, FitSettings())
+    assert early.conflicts > 0 and not early.ok
+    assert conflicts_with(early, obst, FitSettings()) == {"road 0": early.conflicts}
 
 
 def test_inf_radius_turn_is_the_gentlest_curve_and_never_tighter_than_the_floor():
@@ -142,7 +142,8 @@ def test_inf_radius_candidates_below_the_floor_are_penalised_and_not_acceptable(
     x = lo[:, None] + (hi - lo)[:, None] * np.random.default_rng(1).random((len(lo), 40))
     f, terms = ramp_objective(spec, Obstacles(), FitSettings())
     t = terms(x)
-    rmin = lane_radius(sample_spline(_decode(spec, x).ctrl, 24).curvature, W).min(-1)
+    rmin = lane_radius(sample_spline(_decode(spec, x).ctrl, FitSettings().samples).curvature,
+                       W).min(-1)
     assert np.allclose(t["rad_err"], np.minimum(rmin - 400.0, 0.0) / 400.0, rtol=1e-9)
     below = rmin < 0.98 * 400.0
     assert below.any() and not f.acceptable(f.table(x))[below].any()
@@ -229,18 +230,32 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
     assert np.allclose(g2, ((kk[:, 1:, 0] - kk[:, :-1, -1]) ** 2).sum(-1), rtol=1e-9)
     assert not conf.any() and not depth.any()
     # heights enter through the conflicts: a road band at each candidate's mid-height is
-    # met exactly where the numpy grade line is within the clearance of it
+    # met exactly where the numpy grade line is within the clearance of it; each sample
+    # stands for the stretch from the previous one, followed in steps of <= STEP_M
     z = heights(ref.s, ref.length, za, zc, zb, 0.04, 40.0)
+    tan = ref.tangent
+    half = 0.5 * W / np.maximum(np.hypot(tan[..., 0], tan[..., 1]), 1e-9)
+    lane = np.stack([ref.xy[..., 0] + half * tan[..., 1], ref.xy[..., 1] - half * tan[..., 0]], -1)
     for i in range(3):
         zl = float(z[i, m])
         road = np.array([[-1e4, -1e4, 1.0, 0.0, -1e5, 1e5, -1e5, 1e5, zl]])  # covers the plane
         got = _kernels.spline_terms(ctrl[i:i + 1], m, W, za[i:i + 1], zc[i:i + 1], zb[i:i + 1],
                                     0.04, 40.0, 15.0, 1.5, 5.5, road, *empty.grid(10.0))
-        inner = (ref.s[i] > 15.0) & (ref.s[i] < ref.length[i] - 15.0)
-        hit = inner & (np.abs(z[i] - zl) < 5.5)
-        assert got[6][0] == int(hit.sum())
-        # deep in a band that covers the plane: the way out is up or down
-        assert got[7][0] == pytest.approx((5.5 - np.abs(z[i][hit] - zl)).sum(), rel=1e-9)
+        count, deep = 0, 0.0
+        for j in range(n_p * m):
+            k = 1 if j == 0 else max(1, math.ceil(np.hypot(*(lane[i, j] - lane[i, j - 1]))
+                                                 / _kernels.STEP_M))
+            t = np.arange(1, k + 1) / k
+            jp = max(j - 1, 0)
+            s_sub = ref.s[i, jp] + t * (ref.s[i, j] - ref.s[i, jp])
+            z_sub = z[i, jp] + t * (z[i, j] - z[i, jp])
+            sub = (s_sub > 15.0) & (s_sub < ref.length[i] - 15.0) & (np.abs(z_sub - zl) < 5.5)
+            if sub.any():
+                count += 1
+                # deep in a band that covers the plane: the way out is up or down
+                deep += (5.5 - np.abs(z_sub[sub] - zl)).max()
+        assert count > 0 and got[6][0] == count
+        assert got[7][0] == pytest.approx(deep, rel=1e-9)
 
 
 def test_objective_terms_follow_their_definition_on_the_decoded_curves():
@@ -283,3 +298,22 @@ def test_objective_terms_follow_their_definition_on_the_decoded_curves():
           & (t["turn_err"] < 0.05) & (t["conflicts"] == 0) & (t["excess"] < 0.3))
     assert np.array_equal(f.acceptable(f.table(x)), ok)
     assert set(_kernels.TERMS) == set(t)
+
+
+def test_a_crossing_between_two_samples_is_still_a_conflict():
+    """Samples 10 m apart on either side of another ramp's lane (5 m from its centre,
+    farther than the two half widths): the lane is followed between them, so the
+    crossing counts, once, for the sample whose stretch crosses."""
+    from flyover.geometry import _kernels
+
+    x = np.arange(0.0, 101.0, 10.0)[None, :] + 0.5  # crosses x = 55.5 between 50.5 and 60.5
+    y = np.zeros_like(x)
+    ys = np.arange(-60.0, 60.0, 1.0)
+    obst = Obstacles(points=np.stack([np.full_like(ys, 55.5), ys], -1), z=np.zeros(len(ys)),
+                     half_width=np.full(len(ys), 1.5), owner=("b",) * len(ys))
+    args = (15.0, 1.5, 5.5, np.zeros((0, 9))) + obst.grid(10.0)
+    n, depth = _kernels.conflicts(x, y, x - 0.5, np.zeros_like(x), np.array([100.0]), *args)
+    assert n[0] == 1 and depth[0] == pytest.approx(3.0)
+    # 6 m above the other lane (clearance 5.5 m): no conflict
+    n, _ = _kernels.conflicts(x, y, x - 0.5, np.full_like(x, 6.0), np.array([100.0]), *args)
+    assert n[0] == 0

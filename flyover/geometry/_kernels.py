@@ -9,9 +9,11 @@ meet an obstacle at the same level (closer than ``clearance`` in height):
 * a sample of an already fitted ramp closer than the two half widths.
 
 Ramp samples sit in a uniform grid (:func:`grid`, cells of at least the
-largest reach), so each candidate sample looks at the 3 x 3 cells around it.
-Only the inner samples count (``end_zone`` from either end, where a ramp
-leaves or joins its parent, is exempt).
+largest reach), so each candidate point looks at the 3 x 3 cells around it.
+Between two samples a candidate's lane centre is followed in steps of at most
+:data:`STEP_M`, and obstacle ramps are sampled as densely, so that a crossing
+cannot slip between samples. Only the inner points count (``end_zone`` from
+either end, where a ramp leaves or joins its parent, is exempt).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["grid", "conflicts"]
+__all__ = ["STEP_M", "grid", "conflicts"]
 
 
 def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float, float, int, int]:
@@ -40,58 +42,91 @@ def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float
     return order, starts.astype(np.int64), float(x0), float(y0), nx, ny
 
 
+#: longest step (m) between the points where a candidate's lane centre is tested for
+#: conflicts: between two samples the lane centre is followed in steps this short, so a
+#: crossing (at least the two half widths long) cannot slip between samples
+STEP_M = 1.0
+
+
+@njit(cache=True, inline="always")
+def _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw, starts, x0, y0, cell, nx,
+              ny):  # pragma: no cover - compiled
+    """How deep the lane-centre point ``x, y, zz`` is in whatever it meets (0: clear)."""
+    deep = 0.0
+    for k in range(lines.shape[0]):
+        dz = clearance - abs(zz - lines[k, 8])
+        if dz <= 0.0:
+            continue
+        rx, ry = x - lines[k, 0], y - lines[k, 1]
+        along = rx * lines[k, 2] + ry * lines[k, 3]
+        if along <= lines[k, 4] or along >= lines[k, 5]:
+            continue
+        lat = lines[k, 2] * ry - lines[k, 3] * rx
+        lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
+        if lat > lo and lat < hi:
+            deep = max(deep, min(dz, lat - lo, hi - lat))
+    if px.shape[0] > 0:
+        gx = int(np.floor((x - x0) / cell))
+        gy = int(np.floor((y - y0) / cell))
+        for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
+            for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
+                c = ix * ny + iy
+                for j in range(starts[c], starts[c + 1]):
+                    dz = clearance - abs(zz - pz[j])
+                    if dz <= 0.0:
+                        continue
+                    dx, dy = x - px[j], y - py[j]
+                    r = hw + phw[j]
+                    d2 = dx * dx + dy * dy
+                    if d2 < r * r:
+                        deep = max(deep, min(dz, r - np.sqrt(d2)))
+    return deep
+
+
 @njit(cache=True, nogil=True)
 def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
               px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover - compiled
     """Conflicting inner samples per candidate ``(P,)`` from samples ``(P, N)``, and
     how deep they are in (``(P,)``, metres summed over the conflicting samples).
 
-    A sample's depth is the least it would have to move to be clear of all it
-    meets: sideways (out of a road's band or a ramp's lane) or up/down (to the
-    clearance), whichever is less, the largest over what it meets. It grades the
-    penalty inside a conflict, which the count alone leaves flat.
-    ``px, py, pz, phw``: obstacle ramp samples sorted by grid cell
-    (``starts`` per cell, see :func:`grid`).
+    Sample ``i`` stands for the stretch of lane centre from sample ``i - 1`` to it,
+    followed in straight steps of at most :data:`STEP_M` (heights and stations
+    interpolated): it conflicts when any point of that stretch outside the end
+    zones does. A point's depth is the least it would have to move to be clear
+    of all it meets: sideways (out of a road's band or a ramp's lane) or up/down
+    (to the clearance), whichever is less, the largest over what it meets; a
+    sample's depth is the largest over its stretch. It grades the penalty inside
+    a conflict, which the count alone leaves flat. ``px, py, pz, phw``: obstacle
+    ramp samples sorted by grid cell (``starts`` per cell, see :func:`grid`);
+    they should lie no more than :data:`STEP_M` apart along their ramps.
     """
     p_count, n = cx.shape
     out = np.zeros(p_count, np.int64)
     depth = np.zeros(p_count)
-    n_lines = lines.shape[0]
     for p in range(p_count):
         hi_s = length[p] - end_zone
         for i in range(n):
-            si = s[p, i]
-            if si <= end_zone or si >= hi_s:
-                continue
-            x, y, zz = cx[p, i], cy[p, i], z[p, i]
+            steps = 1
+            if i > 0:
+                seg = np.hypot(cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1])
+                steps = max(1, int(np.ceil(seg / STEP_M)))
             deep = 0.0
-            for k in range(n_lines):
-                dz = clearance - abs(zz - lines[k, 8])
-                if dz <= 0.0:
+            for q in range(1, steps + 1):
+                t = q / steps
+                if i > 0:
+                    si = s[p, i - 1] + t * (s[p, i] - s[p, i - 1])
+                else:
+                    si = s[p, i]
+                if si <= end_zone or si >= hi_s:
                     continue
-                rx, ry = x - lines[k, 0], y - lines[k, 1]
-                along = rx * lines[k, 2] + ry * lines[k, 3]
-                if along <= lines[k, 4] or along >= lines[k, 5]:
-                    continue
-                lat = lines[k, 2] * ry - lines[k, 3] * rx
-                lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
-                if lat > lo and lat < hi:
-                    deep = max(deep, min(dz, lat - lo, hi - lat))
-            if px.shape[0] > 0:
-                gx = int(np.floor((x - x0) / cell))
-                gy = int(np.floor((y - y0) / cell))
-                for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
-                    for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
-                        c = ix * ny + iy
-                        for j in range(starts[c], starts[c + 1]):
-                            dz = clearance - abs(zz - pz[j])
-                            if dz <= 0.0:
-                                continue
-                            dx, dy = x - px[j], y - py[j]
-                            r = hw + phw[j]
-                            d2 = dx * dx + dy * dy
-                            if d2 < r * r:
-                                deep = max(deep, min(dz, r - np.sqrt(d2)))
+                if i > 0:
+                    x = cx[p, i - 1] + t * (cx[p, i] - cx[p, i - 1])
+                    y = cy[p, i - 1] + t * (cy[p, i] - cy[p, i - 1])
+                    zz = z[p, i - 1] + t * (z[p, i] - z[p, i - 1])
+                else:
+                    x, y, zz = cx[p, i], cy[p, i], z[p, i]
+                deep = max(deep, _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw,
+                                           starts, x0, y0, cell, nx, ny))
             if deep > 0.0:
                 out[p] += 1
                 depth[p] += deep

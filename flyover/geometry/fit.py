@@ -190,7 +190,7 @@ class FitSettings:
     patience: int = 30
     conflict_weight: float = 2.0
     depth_weight: float = 0.25  # per metre a conflicting sample is in, relative to the count
-    samples: int = 24
+    samples: int = 64
     vectorized: bool = True
     engine: str = "jade"
 
@@ -464,12 +464,13 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
             coarse_good.add(np.ascontiguousarray(x[:, j]).tobytes())
         return f.energy(t)
 
-    fine, _ = ramp_objective(spec, obstacles, replace(settings, samples=64))
+    fine = None if settings.samples >= 64 else \
+        ramp_objective(spec, obstacles, replace(settings, samples=64))[0]
 
     def good(xk: np.ndarray) -> bool:
         if np.ascontiguousarray(xk, float).tobytes() not in coarse_good:
             return False
-        return bool(fine.acceptable(fine.table(xk[:, None]))[0])
+        return fine is None or bool(fine.acceptable(fine.table(xk[:, None]))[0])
 
     best = [np.inf, 0]  # best energy so far, generation it last improved by 1 %
 
@@ -558,46 +559,66 @@ def recount(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> RampFi
 def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> dict[str, int]:
     """What a fitted ramp meets at the same level: obstacle name → samples (as measured).
 
-    The same test as the search's (lane-centre samples, 64 per piece, outside the
-    end zones; a road's band or a ramp's lane closer than the two half widths and
-    less than the clearance apart in height), in numpy, naming the road or ramp.
+    The same test as the search's (lane-centre samples, 64 per piece, each standing
+    for the stretch from the previous one, followed in steps of at most
+    :data:`_kernels.STEP_M`, outside the end zones; a road's band or a ramp's lane
+    closer than the two half widths and less than the clearance apart in height),
+    in numpy, naming the road or ramp.
     """
     from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
 
     coarse = sample_spline(fit.ctrl, 64)
-    s = coarse.s.ravel()
-    z, _ = evaluate_polys(fit.elevation, s)
+    s0 = coarse.s.ravel()
     tang = coarse.tangent
     speed = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-9)
     half = 0.5 * fit.spec.width_m / speed
-    cx, cy = coarse.xy[:, 0] + half * tang[:, 1], coarse.xy[:, 1] - half * tang[:, 0]
+    cx0, cy0 = coarse.xy[:, 0] + half * tang[:, 1], coarse.xy[:, 1] - half * tang[:, 0]
+    z0, _ = evaluate_polys(fit.elevation, s0)
+    # the stretch of each sample from the previous one, as the kernel follows it
+    seg = np.hypot(np.diff(cx0), np.diff(cy0))
+    steps = np.concatenate([[1], np.maximum(1, np.ceil(seg / _kernels.STEP_M)).astype(int)])
+    owner_i = np.repeat(np.arange(len(s0)), steps)
+    t = np.concatenate([[1.0]] + [np.arange(1, k + 1) / k for k in steps[1:]])
+    prev = np.maximum(owner_i - 1, 0)
+
+    def lerp(v):
+        return v[prev] + t * (v[owner_i] - v[prev])
+
+    cx, cy, z, s = lerp(cx0), lerp(cy0), lerp(z0), lerp(s0)
     inner = (s > settings.end_zone_m) & (s < fit.length_m - settings.end_zone_m)
     hw = 0.5 * fit.spec.width_m - settings.margin_m
     out: dict[str, int] = {}
-    met = np.zeros((len(s), 0), bool)
-    names: list[str] = []
     lines = np.asarray(obstacles.lines).reshape(-1, 9)
     line_names = obstacles.line_names or tuple(f"road {i}" for i in range(len(lines)))
+
+    def count(hit: np.ndarray) -> int:
+        return int(np.unique(owner_i[hit & inner]).size)
+
     for row, name in zip(lines, line_names):
         rx, ry = cx - row[0], cy - row[1]
         along = rx * row[2] + ry * row[3]
         lat = row[2] * ry - row[3] * rx
-        hit = ((np.abs(z - row[8]) < settings.clearance_m) & (along > row[4]) & (along < row[5])
-               & (lat > row[6] - hw) & (lat < row[7] + hw))
-        met = np.column_stack([met, hit])
-        names.append(name)
+        n = count((np.abs(z - row[8]) < settings.clearance_m) & (along > row[4])
+                  & (along < row[5]) & (lat > row[6] - hw) & (lat < row[7] + hw))
+        if n:
+            out[name] = out.get(name, 0) + n
     if len(obstacles.points):
+        from scipy.spatial import cKDTree  # noqa: PLC0415
+
         owner = np.asarray(obstacles.owner)
+        pts = np.stack([cx, cy], axis=-1)
         for name in dict.fromkeys(obstacles.owner):
             k = owner == name
             p, pz, phw = obstacles.points[k], obstacles.z[k], obstacles.half_width[k]
-            d2 = (cx[:, None] - p[None, :, 0]) ** 2 + (cy[:, None] - p[None, :, 1]) ** 2
-            hit = ((d2 < (hw + phw[None, :]) ** 2)
-                   & (np.abs(z[:, None] - pz[None, :]) < settings.clearance_m)).any(1)
-            met = np.column_stack([met, hit])
-            names.append(name)
-    for j, name in enumerate(names):
-        n = int((met[:, j] & inner).sum())
-        if n:
-            out[name] = n
+            near = cKDTree(p).query_ball_point(pts, hw + float(phw.max()))
+            hit = np.zeros(len(pts), bool)
+            for i, js in enumerate(near):
+                if js and inner[i]:
+                    js = np.asarray(js)
+                    d2 = (cx[i] - p[js, 0]) ** 2 + (cy[i] - p[js, 1]) ** 2
+                    hit[i] = bool(((d2 < (hw + phw[js]) ** 2)
+                                   & (np.abs(z[i] - pz[js]) < settings.clearance_m)).any())
+            n = count(hit)
+            if n:
+                out[name] = n
     return out

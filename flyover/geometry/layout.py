@@ -85,6 +85,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 from flyover.errors import FlyoverError
+from flyover.geometry import _kernels
 from flyover.geometry.bezier import sample_spline
 from flyover.geometry.fit import (
     FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, conflicts_with, fit_ramp, recount,
@@ -738,7 +739,11 @@ class _Builder:
         # obstacle for later ramps, is sampled as the search samples candidates
         per_piece = math.ceil(fit.length_m / len(fit.ctrl))
         stations = _stations(fit, int(min(4000, max(64, per_piece))))
-        centre = _stations(fit, 64, self.width[ramp] / 2)
+        # the lane centre as an obstacle: points no more than the search's step apart
+        # (a piece's control polygon is at least as long as the piece)
+        polygon = float(np.linalg.norm(np.diff(fit.ctrl, axis=1), axis=-1).sum(-1).max())
+        dense = int(math.ceil(1.2 * polygon / _kernels.STEP_M))
+        centre = _stations(fit, max(64, dense), self.width[ramp] / 2)
         self.rails[ramp] = {**stations, "centre": centre["xy"], "centre_z": centre["z"]}
         for end, t, is_start in ((fit.spec.start, fit.start_s, True), (fit.spec.end, fit.end_s, False)):
             if end is None:
