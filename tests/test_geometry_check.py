@@ -1,0 +1,62 @@
+"""The independent dense same-level check of a geometry.json value."""
+
+import math
+
+import pytest
+
+from flyover.geometry.check import same_level_conflicts
+from flyover.geometry.model import (Attachment, BezierPiece, ElevationPoly, InterchangeGeometry,
+                                    RampGeometry, RoadGeometry)
+
+
+def _straight(id_, p0, p1, z=0.0, lanes=1):
+    """A straight one-lane ramp from p0 to p1 at height z (one cubic piece)."""
+    (x0, y0), (x1, y1) = p0, p1
+    ctrl = tuple((x0 + (x1 - x0) * t, y0 + (y1 - y0) * t) for t in (0, 1 / 3, 2 / 3, 1))
+    length = math.hypot(x1 - x0, y1 - y0)
+    h = math.atan2(y1 - y0, x1 - x0)
+    return RampGeometry(
+        id=id_, lanes=lanes, plan=(BezierPiece(ctrl, length),),
+        elevation=(ElevationPoly(0.0, z, 0.0, 0.0, 0.0),),
+        start=Attachment("", "", 0.0, 0.0, h, z), end=Attachment("", "", 0.0, 0.0, h, z),
+        target_radius_m=math.inf, target_slope_pct=0.0, min_radius_m=math.inf,
+        max_slope_pct=0.0, length_m=length)
+
+
+def _geometry(*ramps, roads=()):
+    return InterchangeGeometry("c0", 0, 1, levels_m=(0.0, 6.5), roads=roads, ramps=ramps)
+
+
+def test_two_ramps_crossing_at_one_level_conflict_once_each_crossing():
+    a = _straight("a", (-200.0, 0.0), (200.0, 0.0))
+    b = _straight("b", (0.0, -200.0), (0.0, 200.0))
+    found = same_level_conflicts(_geometry(a, b))
+    assert [(c.ramp, c.other) for c in found] == [("a", "b")]
+    c = found[0]
+    # the lane centres are 2 m right of the reference lines: they cross at (2, -2), and
+    # are closer than the two half widths (less the margins: 3 m) from x = -1 to 5
+    assert c.s_m == pytest.approx(199.0, abs=0.6) and c.length_m == pytest.approx(6.0, abs=1.2)
+    assert c.dz_m == 0.0
+
+
+def test_ramps_a_clearance_apart_or_side_by_side_do_not_conflict():
+    a = _straight("a", (-200.0, 0.0), (200.0, 0.0))
+    over = _straight("b", (0.0, -200.0), (0.0, 200.0), z=6.5)
+    assert same_level_conflicts(_geometry(a, over)) == ()
+    beside = _straight("c", (-200.0, -4.0), (200.0, -4.0))  # the next lane to the right
+    assert same_level_conflicts(_geometry(a, beside)) == ()
+    overlapping = _straight("d", (-200.0, -2.5), (200.0, -2.5))
+    (c,) = same_level_conflicts(_geometry(a, overlapping))
+    assert c.length_m == pytest.approx(400.0 - 2 * 15.0, abs=1.0)  # but the end zones
+
+
+def test_a_ramp_on_a_road_at_its_height_conflicts_and_names_the_road():
+    road = RoadGeometry("A1", "A", 3, 0, 0.0, (-500.0, 10.0), 0.0, 1000.0)  # lanes y 10 .. -1.25
+    ramp = _straight("r", (0.0, -100.0), (0.0, 100.0))
+    (c,) = same_level_conflicts(_geometry(ramp, roads=(road,)))
+    assert (c.ramp, c.other) == ("r", "A1")
+    # lane centre x = 2: on the lanes (plus its half width) from y = -2.75 to 11.5
+    assert c.s_m == pytest.approx(100.0 - 2.75, abs=0.6)
+    assert c.length_m == pytest.approx(14.25, abs=1.2)
+    up = _straight("r", (0.0, -100.0), (0.0, 100.0), z=5.6)
+    assert same_level_conflicts(_geometry(up, roads=(road,))) == ()
