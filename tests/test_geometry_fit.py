@@ -308,12 +308,14 @@ def test_a_crossing_between_two_samples_is_still_a_conflict():
 
     x = np.arange(0.0, 101.0, 10.0)[None, :] + 0.5  # crosses x = 55.5 between 50.5 and 60.5
     y = np.zeros_like(x)
-    ys = np.arange(-60.0, 60.0, 1.0)
+    ys = np.arange(-60.0, 60.0, _kernels.STEP_M)
     obst = Obstacles(points=np.stack([np.full_like(ys, 55.5), ys], -1), z=np.zeros(len(ys)),
                      half_width=np.full(len(ys), 1.5), owner=("b",) * len(ys))
     args = (15.0, 1.5, 5.5, np.zeros((0, 9))) + obst.grid(10.0)
     n, depth = _kernels.conflicts(x, y, x - 0.5, np.zeros_like(x), np.array([100.0]), *args)
-    assert n[0] == 1 and depth[0] == pytest.approx(3.0)
+    # steps of STEP_M from 50.5: the nearest comes within 1 m of it (reach widened by
+    # half the obstacle's point spacing: sqrt(3² + 1²))
+    assert n[0] == 1 and depth[0] == pytest.approx(math.sqrt(10.0) - 1.0)
     # 6 m above the other lane (clearance 5.5 m): no conflict
     n, _ = _kernels.conflicts(x, y, x - 0.5, np.full_like(x, 6.0), np.array([100.0]), *args)
     assert n[0] == 0

@@ -45,7 +45,11 @@ def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float
 #: longest step (m) between the points where a candidate's lane centre is tested for
 #: conflicts: between two samples the lane centre is followed in steps this short, so a
 #: crossing (at least the two half widths long) cannot slip between samples
-STEP_M = 1.0
+STEP_M = 2.0
+#: an obstacle ramp's points are STEP_M apart, so a point within the two half widths of
+#: its lane centre line may lie up to STEP_M / 2 along it from the nearest one: the
+#: reach to a point is widened to cover that (never by more than 0.2 m for one lane)
+_ALONG2 = (STEP_M / 2) ** 2
 
 
 @njit(cache=True, inline="always")
@@ -76,11 +80,48 @@ def _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw, starts, x0, y0, c
                     if dz <= 0.0:
                         continue
                     dx, dy = x - px[j], y - py[j]
-                    r = hw + phw[j]
+                    r = np.sqrt((hw + phw[j]) ** 2 + _ALONG2)
                     d2 = dx * dx + dy * dy
                     if d2 < r * r:
                         deep = max(deep, min(dz, r - np.sqrt(d2)))
     return deep
+
+
+@njit(cache=True, inline="always")
+def _near(xa, ya, za, xb, yb, zb, hw, clearance, lines, n_points, starts, x0, y0, cell, nx,
+          ny):  # pragma: no cover - compiled
+    """Whether anything could be met on the straight stretch from ``a`` to ``b``: a road
+    band it enters (exact: along, across and height are linear along the stretch) or a
+    grid cell with obstacle ramp points next to its bounding box."""
+    for k in range(lines.shape[0]):
+        zk = lines[k, 8]
+        if (za - zk >= clearance and zb - zk >= clearance) or \
+                (zk - za >= clearance and zk - zb >= clearance):
+            continue
+        ra, rb = (xa - lines[k, 0], ya - lines[k, 1]), (xb - lines[k, 0], yb - lines[k, 1])
+        al_a = ra[0] * lines[k, 2] + ra[1] * lines[k, 3]
+        al_b = rb[0] * lines[k, 2] + rb[1] * lines[k, 3]
+        if (al_a <= lines[k, 4] and al_b <= lines[k, 4]) or \
+                (al_a >= lines[k, 5] and al_b >= lines[k, 5]):
+            continue
+        la = lines[k, 2] * ra[1] - lines[k, 3] * ra[0]
+        lb = lines[k, 2] * rb[1] - lines[k, 3] * rb[0]
+        lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
+        if (la <= lo and lb <= lo) or (la >= hi and lb >= hi):
+            continue
+        return True
+    if n_points == 0:
+        return False
+    gx0 = max(int(np.floor((min(xa, xb) - x0) / cell)) - 1, 0)
+    gx1 = min(int(np.floor((max(xa, xb) - x0) / cell)) + 1, nx - 1)
+    gy0 = max(int(np.floor((min(ya, yb) - y0) / cell)) - 1, 0)
+    gy1 = min(int(np.floor((max(ya, yb) - y0) / cell)) + 1, ny - 1)
+    for ix in range(gx0, gx1 + 1):
+        for iy in range(gy0, gy1 + 1):
+            c = ix * ny + iy
+            if starts[c + 1] > starts[c]:
+                return True
+    return False
 
 
 @njit(cache=True, nogil=True)
@@ -108,6 +149,10 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
         for i in range(n):
             steps = 1
             if i > 0:
+                if not _near(cx[p, i - 1], cy[p, i - 1], z[p, i - 1], cx[p, i], cy[p, i],
+                             z[p, i], hw, clearance, lines, px.shape[0], starts, x0, y0,
+                             cell, nx, ny):
+                    continue
                 seg = np.hypot(cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1])
                 steps = max(1, int(np.ceil(seg / STEP_M)))
             deep = 0.0

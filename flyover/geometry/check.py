@@ -14,6 +14,9 @@ Rule (the fitter's, made symmetric): a lane-centre sample of ramp A, outside
   than the two half widths (less ``margin_m`` each) and less than
   ``clearance_m`` apart in height.
 
+Heights are compared to ``tolerance_m`` (5 cm): the search follows the
+profile in straight steps between its samples.
+
 Example
 -------
 >>> from flyover.geometry.model import InterchangeGeometry
@@ -75,9 +78,11 @@ def _runs(ramp: str, other: str, s: np.ndarray, hit: np.ndarray, dz: np.ndarray,
 
 def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.0,
                          clearance_m: float = 5.5, end_zone_m: float = 15.0,
-                         margin_m: float = 0.5) -> tuple[Conflict, ...]:
+                         margin_m: float = 0.5, tolerance_m: float = 0.05
+                         ) -> tuple[Conflict, ...]:
     """Every same-level conflict of ``geometry``, one :class:`Conflict` per run of
     conflicting stations (ramp-ramp pairs reported once, by the first ramp id)."""
+    clearance_m -= tolerance_m
     lanes = {}
     for r in geometry.ramps:
         width = r.lanes * geometry.ramp_lane_width_m

@@ -610,13 +610,13 @@ def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) ->
         for name in dict.fromkeys(obstacles.owner):
             k = owner == name
             p, pz, phw = obstacles.points[k], obstacles.z[k], obstacles.half_width[k]
-            near = cKDTree(p).query_ball_point(pts, hw + float(phw.max()))
+            near = cKDTree(p).query_ball_point(pts, hw + float(phw.max()) + _kernels.STEP_M)
             hit = np.zeros(len(pts), bool)
             for i, js in enumerate(near):
                 if js and inner[i]:
                     js = np.asarray(js)
                     d2 = (cx[i] - p[js, 0]) ** 2 + (cy[i] - p[js, 1]) ** 2
-                    hit[i] = bool(((d2 < (hw + phw[js]) ** 2)
+                    hit[i] = bool(((d2 < (hw + phw[js]) ** 2 + (_kernels.STEP_M / 2) ** 2)
                                    & (np.abs(z[i] - pz[js]) < settings.clearance_m)).any())
             n = count(hit)
             if n:
