@@ -60,3 +60,19 @@ def test_a_ramp_on_a_road_at_its_height_conflicts_and_names_the_road():
     assert c.length_m == pytest.approx(14.25, abs=1.2)
     up = _straight("r", (0.0, -100.0), (0.0, 100.0), z=5.6)
     assert same_level_conflicts(_geometry(up, roads=(road,))) == ()
+
+
+def test_the_clearance_row_names_the_file_and_what_meets_what(tmp_path):
+    from flyover.geometry.model import write_geometry
+    from flyover.opendrive.pipeline import clearance_check
+
+    path = tmp_path / "geometry.json"
+    write_geometry(_geometry(_straight("a", (-200.0, 0.0), (200.0, 0.0)),
+                             _straight("b", (0.0, -200.0), (0.0, 200.0))), path)
+    row = clearance_check(path)
+    assert row.check == "clearance" and not row.ok
+    assert row.detail.startswith(f"{path}: a meets b at s=199 m") and "\n" not in row.detail
+    write_geometry(_geometry(_straight("a", (-200.0, 0.0), (200.0, 0.0)),
+                             _straight("b", (0.0, -200.0), (0.0, 200.0), z=6.5)), path)
+    assert clearance_check(path).ok
+    assert not clearance_check(path, clearance_m=7.0).ok

@@ -3,7 +3,8 @@
 ``results/validation.parquet`` has one row per interchange × check:
 ``class_id, sample, check, ok, detail``; the checks are :data:`PIPELINE_CHECKS`:
 ``export`` (writing the ``.xodr`` from ``geometry.json``), then
-:data:`flyover.opendrive.validate.CHECKS`.
+:data:`flyover.opendrive.validate.CHECKS`, then ``clearance`` (no same-level
+conflict anywhere in ``geometry.json``, by :mod:`flyover.geometry.check`).
 
 An interchange that cannot be written is rows, not a missing table: the
 validation of one interchange reads only its ``geometry.json`` and writes the
@@ -32,14 +33,14 @@ from flyover.opendrive.validate import CHECKS, CheckResult, validate_xodr
 from flyover.opendrive.writer import ExportOptions, xodr_bytes
 
 __all__ = ["VALIDATION_SCHEMA", "PIPELINE_CHECKS", "export_options", "export_interchange",
-           "validate_interchange", "collect_validation"]
+           "validate_interchange", "clearance_check", "collect_validation"]
 
 log = logging.getLogger(__name__)
 
 VALIDATION_SCHEMA = pa.schema([("class_id", pa.string()), ("sample", pa.int32()),
                                ("check", pa.string()), ("ok", pa.bool_()), ("detail", pa.string())])
 #: the checks of every interchange in ``results/validation.parquet``, in row order
-PIPELINE_CHECKS = ("export",) + CHECKS
+PIPELINE_CHECKS = ("export",) + CHECKS + ("clearance",)
 
 
 def export_options(section: Mapping) -> ExportOptions:
@@ -84,9 +85,28 @@ def export_interchange(geometry: str | os.PathLike, xodr: str | os.PathLike,
         raise
 
 
+def clearance_check(geometry: str | os.PathLike, clearance_m: float = 5.5) -> CheckResult:
+    """The ``clearance`` row: every ramp's lane centre, every metre, clear of every road
+    and ramp it is not at least ``clearance_m`` above or below."""
+    from flyover.geometry.check import same_level_conflicts  # noqa: PLC0415
+
+    try:
+        g = read_geometry(geometry)
+    except FlyoverError as exc:
+        return CheckResult("clearance", False, f"not run: {exc.one_line()}")
+    found = same_level_conflicts(g, clearance_m=clearance_m)
+    if not found:
+        return CheckResult("clearance", True, f"{len(g.ramps)} ramps clear of every road and "
+                           f"ramp at their level (lane centres every 1 m, {clearance_m:g} m)")
+    parts = [f"{c.ramp} meets {c.other} at s={c.s_m:.0f} m for {c.length_m:.1f} m "
+             f"({c.dz_m:.2f} m apart in height)" for c in found[:5]]
+    more = f"; and {len(found) - 5} more" if len(found) > 5 else ""
+    return CheckResult("clearance", False, f"{geometry}: " + "; ".join(parts) + more)
+
+
 def validate_interchange(geometry: str | os.PathLike, table: str | os.PathLike, *,
                          class_id: str, sample: int, options: ExportOptions | None = None,
-                         run_qc: bool = True) -> list[dict]:
+                         run_qc: bool = True, clearance_m: float = 5.5) -> list[dict]:
     """Write one interchange from ``geometry.json`` and validate it: its rows, written to ``table``.
 
     The ``.xodr`` is written to a temporary folder as ``interchange.xodr``
@@ -117,6 +137,7 @@ def validate_interchange(geometry: str | os.PathLike, table: str | os.PathLike, 
                                    f"junctions, {len(data)} bytes")]
             results += [CheckResult(r.check, r.ok, r.detail.replace(f"{tmp}{os.sep}", f"{folder}{os.sep}"))
                         for r in checked]
+    results.append(clearance_check(geometry, clearance_m))
     rows = [_row(class_id, sample, r) for r in results]
     for r in results:
         failed = not r.ok and not r.detail.startswith("not run")

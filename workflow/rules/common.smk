@@ -12,7 +12,7 @@ validate_config(config, "config/config.yaml")
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 1
 EXPORT_VERSION = 1
-VALIDATION_VERSION = 2
+VALIDATION_VERSION = 3
 
 
 wildcard_constraints:

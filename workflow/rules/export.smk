@@ -47,7 +47,8 @@ rule export_sumo:
 
 
 rule validate_interchange:
-    """One interchange: export, XSD, ASAM checker (1.8 and 1.7), 3D continuity, netconvert, routes."""
+    """One interchange: export, XSD, ASAM checker (1.8 and 1.7), 3D continuity, netconvert, routes,
+    clearance."""
     input:
         geometry="results/interchanges/{class_id}/{sample}/geometry.json",
     output:
@@ -60,6 +61,7 @@ rule validate_interchange:
         version=VALIDATION_VERSION,
         export=config["export"],
         asam_qc=config["validation"]["asam_qc"],
+        clearance_m=config["geometry"]["clearance_m"],
     benchmark:
         "logs/benchmarks/validate/{class_id}/{sample}.tsv"
     script:
