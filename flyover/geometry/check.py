@@ -14,8 +14,8 @@ Rule (the fitter's, made symmetric): a lane-centre sample of ramp A, outside
   than the two half widths (less ``margin_m`` each) and less than
   ``clearance_m`` apart in height.
 
-Heights are compared to ``tolerance_m`` (5 cm): the search follows the
-profile in straight steps between its samples.
+Distances and heights are compared to ``tolerance_m`` (5 cm): the search
+follows the lane centre and the profile in straight steps between its samples.
 
 Example
 -------
@@ -88,7 +88,7 @@ def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.
         width = r.lanes * geometry.ramp_lane_width_m
         xy, z, s, length = _lane_centre(r, width, spacing_m)
         inner = (s > end_zone_m) & (s < length - end_zone_m)
-        lanes[r.id] = (xy[inner], z[inner], s[inner], 0.5 * width - margin_m)
+        lanes[r.id] = (xy[inner], z[inner], s[inner], 0.5 * width - margin_m - tolerance_m / 2)
     out: list[Conflict] = []
     for rid, (xy, z, s, hw) in sorted(lanes.items()):
         for road in geometry.roads:
