@@ -8,8 +8,9 @@ meet an obstacle at the same level (closer than ``clearance`` in height):
   half width;
 * a sample of an already fitted ramp closer than the two half widths.
 
-Ramp samples sit in a uniform grid (:func:`grid`, cells of at least the
-largest reach), so each candidate point looks at the 3 x 3 cells around it.
+Ramp samples sit in a uniform grid (:func:`grid`, cells at least twice the
+largest reach), so each candidate point looks at the 2 x 2 cells around the
+corner of its cell nearest to it.
 Between two samples a candidate's lane centre is followed in steps of at most
 :data:`STEP_M`, and obstacle ramps are sampled as densely, so that a crossing
 cannot slip between samples. Only the inner points count (``end_zone`` from
@@ -70,10 +71,16 @@ def _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw, starts, x0, y0, c
         if lat > lo and lat < hi:
             deep = max(deep, min(dz, lat - lo, hi - lat))
     if px.shape[0] > 0:
-        gx = int(np.floor((x - x0) / cell))
-        gy = int(np.floor((y - y0) / cell))
-        for ix in range(max(gx - 1, 0), min(gx + 2, nx)):
-            for iy in range(max(gy - 1, 0), min(gy + 2, ny)):
+        # cells are at least the reach wide: the 2 x 2 cells around the corner of the
+        # point's cell nearest to it hold everything within reach
+        fx = (x - x0) / cell
+        fy = (y - y0) / cell
+        gx = int(np.floor(fx))
+        gy = int(np.floor(fy))
+        ax = gx - 1 if fx - gx < 0.5 else gx
+        ay = gy - 1 if fy - gy < 0.5 else gy
+        for ix in range(max(ax, 0), min(ax + 2, nx)):
+            for iy in range(max(ay, 0), min(ay + 2, ny)):
                 c = ix * ny + iy
                 for j in range(starts[c], starts[c + 1]):
                     dz = clearance - abs(zz - pz[j])

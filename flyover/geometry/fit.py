@@ -305,7 +305,9 @@ def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) 
     """The conflict kernel's arguments for one ramp: half width, clearance, roads, ramp grid."""
     hw = 0.5 * spec.width_m - settings.margin_m
     reach = hw + (float(obstacles.half_width.max()) if len(obstacles.half_width) else 0.0)
-    grid = obstacles.grid(float(max(10.0, np.ceil(reach))))
+    # the kernel looks at the 2 x 2 cells nearest a point: cells twice the reach (widened
+    # by half the obstacles' point spacing) wide
+    grid = obstacles.grid(float(max(10.0, np.ceil(2.0 * (reach + 0.5 * _kernels.STEP_M)))))
     lines = np.ascontiguousarray(obstacles.lines, float).reshape(-1, 9)
     return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
 
