@@ -35,12 +35,13 @@ def _unwritable(g):
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
-    """Sample 0 is the T, sample 1 a loop the writer refuses; the plan lists both."""
+    """Sample 0 is the loop, sample 1 a T the writer refuses; the plan lists both. (The
+    hand-made T's left turn merges across its carriageway: its clearance row fails too.)"""
     wd = tmp_path_factory.mktemp("wf")
     shutil.copytree(REPO / "config", wd / "config", symlinks=True)
     base = wd / "results" / "interchanges" / CLASS
-    write_geometry(sample_geometry("t"), base / "0" / "geometry.json")
-    write_geometry(_unwritable(sample_geometry("loop")), base / "1" / "geometry.json")
+    write_geometry(sample_geometry("loop"), base / "0" / "geometry.json")
+    write_geometry(_unwritable(sample_geometry("t")), base / "1" / "geometry.json")
     (wd / "results" / "geometry").mkdir(parents=True)
     (wd / "results" / "geometry" / "plan.json").write_text(json.dumps({CLASS: [0, 1]}))
     targets = ["results/validation.parquet"] + [
@@ -69,7 +70,7 @@ def test_the_good_interchange_passes_every_check_and_is_built(run):
     rows = [r for r in pq.read_table(wd / "results" / "validation.parquet").to_pylist() if r["sample"] == 0]
     assert all(r["ok"] for r in rows), rows
     folder = wd / "results" / "interchanges" / CLASS / "0"
-    assert (folder / "interchange.xodr").read_bytes() == xodr_bytes(sample_geometry("t"))
+    assert (folder / "interchange.xodr").read_bytes() == xodr_bytes(sample_geometry("loop"))
     assert (folder / "interchange.net.xml").stat().st_size > 0
     assert (folder / "plan.png").read_bytes()[:4] == b"\x89PNG"
     assert (wd / "logs" / "benchmarks" / "export_sumo" / CLASS / "0.tsv").exists()
