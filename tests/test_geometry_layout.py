@@ -403,32 +403,32 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
 
 @pytest.mark.slow
 def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slope():
-    """A catalog stack feature set (sample 0 of the workflow's t=2 array): the upper
-    left turn lB2 still crosses the lower one lA2 after Algorithm 1's resampling; the
-    clearing draws (steepest slope of the domain) build it without a crossing."""
+    """A catalog cloverstack feature set (sample 7 of the workflow's t=2 array): the outer
+    connector oA1 still meets the loop lB1 at its level after Algorithm 1's resampling;
+    the clearing draws (steepest slope of the domain) build it without a conflict."""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
-    t = catalog_topologies()["stack4"]
-    lanes = {"A1": 3, "A2": 3, "B1": 5, "B2": 4}
-    targets = {"eA1": (inf := math.inf, 4), "eA2": (inf, 5), "eB1": (inf, 5), "eB2": (inf, 2),
-               "lA1": (inf, 4), "lA2": (inf, 5), "lB1": (inf, 5), "lB2": (inf, 3),
-               "mA1": (inf, 1), "mA2": (100, 2), "mB1": (210, 2), "mB2": (210, 5),
-               "rA1": (40, 2), "rA2": (150, 3), "rB1": (30, 5), "rB2": (inf, 4)}
+    t = catalog_topologies()["cloverstack"]
+    lanes = {"A1": 5, "A2": 5, "B1": 5, "B2": 4}
+    targets = {"eA1": (math.inf, 4), "eA2": (280, 2), "fA1": (210, 5), "fA2": (150, 4),
+               "lB1": (100, 4), "lB2": (60, 4), "oA1": (40, 1), "oA2": (30, 4),
+               "oB1": (280, 5), "oB2": (40, 1)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
-    domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, inf),
-                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 2254874787)
-    assert domain.clearing("lB2", 1).slope_pct == 5.0
+    domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
+                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 2056955243)
+    assert domain.clearing("oA1", 1).slope_pct == 5.0
     assert DomainResampler((30.0,), (0.0,), frozenset({"c"}), 1).clearing("c", 1) is None
 
     def build(resampler):
-        ic = build_interchange(t, lanes, feats, class_id="c0", sample=0, seed=2254874787,
+        ic = build_interchange(t, lanes, feats, class_id="c0", sample=7, seed=2056955243,
                                resampler=resampler)
         return {o.ramp: o for o in ic.outcomes}
 
     plain = build(lambda ramp, attempt: domain(ramp, attempt))  # no clearing draws
-    assert plain["lB2"].fit.conflicts > 0 and "same-level conflict" in plain["lB2"].infeasible
+    assert plain["oA1"].fit.conflicts > 0 and "same-level conflict" in plain["oA1"].infeasible
+    assert plain["oA1"].resamples == 3
     out = build(domain)
     assert all(o.fit.conflicts == 0 for o in out.values())
-    lb2 = out["lB2"]
-    assert lb2.fit.ok and lb2.fit.spec.target_slope_pct == 5.0
-    assert lb2.resamples > plain["lB2"].resamples and not lb2.infeasible
+    o_a1 = out["oA1"]
+    assert o_a1.fit.ok and o_a1.fit.spec.target_slope_pct == 5.0
+    assert o_a1.resamples > plain["oA1"].resamples and not o_a1.infeasible
