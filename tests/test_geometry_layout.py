@@ -116,6 +116,14 @@ def test_ramp_missing_its_target_is_resampled_a_bounded_number_of_times():
     assert not o.first_try_ok and o.resamples == 2 and calls == [("oA1", 1), ("oA1", 2)]
     assert o.fit.ok and o.fit.spec.target_radius_m == 150.0
     assert ic.geometry.ramp("oA1").resamples == 2
+    # the table keeps both: the targets met and the feature set's
+    from flyover.geometry.tables import geometry_rows  # noqa: PLC0415
+
+    row = next(r for r in geometry_rows(ic) if r["ramp"] == "oA1")
+    assert (row["target_radius_m"], row["first_target_radius_m"]) == (150.0, 5000.0)
+    assert row["first_target_slope_pct"] == 4.0
+    other = next(r for r in geometry_rows(ic) if r["ramp"] != "oA1")
+    assert other["first_target_radius_m"] == other["target_radius_m"] == 150.0
 
 
 def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():

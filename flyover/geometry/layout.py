@@ -167,6 +167,8 @@ class RampOutcome:
     infeasible: str
     evaluations: int
     seconds: float
+    #: the targets of the feature set (the fit's may be resampled ones)
+    first_targets: RampFeatures | None = None
 
 
 @dataclass(frozen=True)
@@ -916,7 +918,7 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
         reason = "" if fit.ok else _reason(fit, met)
         b.record(ramp, fit)
-        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs))
+        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs, feat))
     return Interchange(_assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
 
 

@@ -41,6 +41,8 @@ GEOMETRY_SCHEMA = pa.schema([
     # additions beyond DESIGN.md (backwards compatible)
     ("first_try_ok", pa.bool_()), ("resamples", pa.int32()), ("infeasible", pa.string()),
     ("conflicts", pa.int32()),
+    # the feature set's targets (target_* are the resampled ones when resamples > 0)
+    ("first_target_radius_m", pa.float64()), ("first_target_slope_pct", pa.float64()),
 ])
 
 FeatureSet = tuple[dict[str, int], dict[str, RampFeatures]]
@@ -156,6 +158,10 @@ def geometry_rows(ic: Interchange) -> list[dict]:
             "seconds": round(float(o.seconds), 3), "first_try_ok": bool(o.first_try_ok),
             "resamples": int(o.resamples), "infeasible": o.infeasible,
             "conflicts": int(f.conflicts),
+            "first_target_radius_m": (o.first_targets or RampFeatures(f.spec.target_radius_m,
+                                      f.spec.target_slope_pct)).radius_m,
+            "first_target_slope_pct": (o.first_targets or RampFeatures(f.spec.target_radius_m,
+                                       f.spec.target_slope_pct)).slope_pct,
         })
     return rows
 
