@@ -163,20 +163,15 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
                 seg = np.hypot(cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1])
                 steps = max(1, int(np.ceil(seg / STEP_M)))
             deep = 0.0
+            a = max(i - 1, 0)  # the stretch's start (sample 0 stands for itself)
             for q in range(1, steps + 1):
                 t = q / steps
-                if i > 0:
-                    si = s[p, i - 1] + t * (s[p, i] - s[p, i - 1])
-                else:
-                    si = s[p, i]
+                si = s[p, a] + t * (s[p, i] - s[p, a])
                 if si <= end_zone or si >= hi_s:
                     continue
-                if i > 0:
-                    x = cx[p, i - 1] + t * (cx[p, i] - cx[p, i - 1])
-                    y = cy[p, i - 1] + t * (cy[p, i] - cy[p, i - 1])
-                    zz = z[p, i - 1] + t * (z[p, i] - z[p, i - 1])
-                else:
-                    x, y, zz = cx[p, i], cy[p, i], z[p, i]
+                x = cx[p, a] + t * (cx[p, i] - cx[p, a])
+                y = cy[p, a] + t * (cy[p, i] - cy[p, a])
+                zz = z[p, a] + t * (z[p, i] - z[p, a])
                 deep = max(deep, _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw,
                                            starts, x0, y0, cell, nx, ny))
             if deep > 0.0:

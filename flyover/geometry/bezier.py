@@ -21,7 +21,8 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["SplineSamples", "sample_spline", "lane_radius", "turning", "heading_vec"]
+__all__ = ["SplineSamples", "sample_spline", "lane_radius", "lane_centre", "turning",
+           "heading_vec"]
 
 
 @lru_cache(maxsize=16)
@@ -106,6 +107,14 @@ def lane_radius(curvature: np.ndarray, width_m: float) -> np.ndarray:
     with np.errstate(divide="ignore"):
         r = np.abs(1.0 / k + 0.5 * width_m)
     return np.where(k == 0.0, np.inf, r)
+
+
+def lane_centre(xy: np.ndarray, tangent: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """x and y ``(...)`` of the lane centre line, ``width_m/2`` right of a left-edge
+    reference line sampled at ``xy`` with tangents ``tangent`` ``(..., 2)``."""
+    speed = np.maximum(np.hypot(tangent[..., 0], tangent[..., 1]), 1e-9)
+    half = 0.5 * width_m / speed
+    return xy[..., 0] + half * tangent[..., 1], xy[..., 1] - half * tangent[..., 0]
 
 
 def turning(tangent: np.ndarray) -> np.ndarray:

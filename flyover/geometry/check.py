@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from flyover.geometry.bezier import sample_spline
+from flyover.geometry.bezier import lane_centre, sample_spline
 from flyover.geometry.model import InterchangeGeometry, RampGeometry
 from flyover.geometry.profile import evaluate_polys
 
@@ -55,10 +55,7 @@ def _lane_centre(ramp: RampGeometry, width: float, spacing: float):
     ctrl = np.array([p.p for p in ramp.plan], float)
     m = max(8, math.ceil(2.0 * max(p.length_m for p in ramp.plan) / spacing))
     smp = sample_spline(ctrl, m)
-    tan = smp.tangent
-    speed = np.maximum(np.hypot(tan[:, 0], tan[:, 1]), 1e-9)
-    half = 0.5 * width / speed
-    xy = np.stack([smp.xy[:, 0] + half * tan[:, 1], smp.xy[:, 1] - half * tan[:, 0]], axis=-1)
+    xy = np.stack(lane_centre(smp.xy, smp.tangent, width), axis=-1)
     z, _ = evaluate_polys(ramp.elevation, smp.s)
     return xy, z, smp.s, float(smp.length)
 

@@ -46,9 +46,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import differential_evolution
+from scipy.spatial import cKDTree
 
 from flyover.geometry import _kernels
-from flyover.geometry.bezier import heading_vec, lane_radius, sample_spline
+from flyover.geometry.bezier import heading_vec, lane_centre, lane_radius, sample_spline
 from flyover.geometry.profile import elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
@@ -315,10 +316,7 @@ def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) 
 def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
                settings: FitSettings) -> np.ndarray:
     """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level."""
-    speed = np.maximum(np.hypot(tangent[..., 0], tangent[..., 1]), 1e-9)
-    half = 0.5 * spec.width_m / speed
-    cx = xy[..., 0] + half * tangent[..., 1]  # lane centre: half the width to the right
-    cy = xy[..., 1] - half * tangent[..., 0]
+    cx, cy = lane_centre(xy, tangent, spec.width_m)
     return _kernels.conflicts(np.ascontiguousarray(cx), np.ascontiguousarray(cy),
                               np.ascontiguousarray(s, float),
                               np.ascontiguousarray(np.broadcast_to(z, s.shape), float),
@@ -571,10 +569,7 @@ def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) ->
 
     coarse = sample_spline(fit.ctrl, 64)
     s0 = coarse.s.ravel()
-    tang = coarse.tangent
-    speed = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-9)
-    half = 0.5 * fit.spec.width_m / speed
-    cx0, cy0 = coarse.xy[:, 0] + half * tang[:, 1], coarse.xy[:, 1] - half * tang[:, 0]
+    cx0, cy0 = lane_centre(coarse.xy, coarse.tangent, fit.spec.width_m)
     z0, _ = evaluate_polys(fit.elevation, s0)
     # the stretch of each sample from the previous one, as the kernel follows it
     seg = np.hypot(np.diff(cx0), np.diff(cy0))
@@ -605,8 +600,6 @@ def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) ->
         if n:
             out[name] = out.get(name, 0) + n
     if len(obstacles.points):
-        from scipy.spatial import cKDTree  # noqa: PLC0415
-
         owner = np.asarray(obstacles.owner)
         pts = np.stack([cx, cy], axis=-1)
         for name in dict.fromkeys(obstacles.owner):

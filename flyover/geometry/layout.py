@@ -168,7 +168,7 @@ class RampOutcome:
     evaluations: int
     seconds: float
     #: the targets of the feature set (the fit's may be resampled ones)
-    first_targets: RampFeatures | None = None
+    first_targets: RampFeatures
 
 
 @dataclass(frozen=True)

@@ -158,10 +158,8 @@ def geometry_rows(ic: Interchange) -> list[dict]:
             "seconds": round(float(o.seconds), 3), "first_try_ok": bool(o.first_try_ok),
             "resamples": int(o.resamples), "infeasible": o.infeasible,
             "conflicts": int(f.conflicts),
-            "first_target_radius_m": (o.first_targets or RampFeatures(f.spec.target_radius_m,
-                                      f.spec.target_slope_pct)).radius_m,
-            "first_target_slope_pct": (o.first_targets or RampFeatures(f.spec.target_radius_m,
-                                       f.spec.target_slope_pct)).slope_pct,
+            "first_target_radius_m": o.first_targets.radius_m,
+            "first_target_slope_pct": o.first_targets.slope_pct,
         })
     return rows
 
