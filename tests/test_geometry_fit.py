@@ -231,11 +231,8 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
     assert not conf.any() and not depth.any()
     # heights enter through the conflicts: a road band at each candidate's mid-height is
     # met exactly where the numpy grade line is within the clearance of it; each sample
-    # stands for the stretch from the previous one, followed in steps of <= STEP_M
+    # stands for the straight stretch from the previous one (heights and stations linear)
     z = heights(ref.s, ref.length, za, zc, zb, 0.04, 40.0)
-    tan = ref.tangent
-    half = 0.5 * W / np.maximum(np.hypot(tan[..., 0], tan[..., 1]), 1e-9)
-    lane = np.stack([ref.xy[..., 0] + half * tan[..., 1], ref.xy[..., 1] - half * tan[..., 0]], -1)
     for i in range(3):
         zl = float(z[i, m])
         road = np.array([[-1e4, -1e4, 1.0, 0.0, -1e5, 1e5, -1e5, 1e5, zl]])  # covers the plane
@@ -243,17 +240,24 @@ def test_compiled_objective_kernel_matches_the_numpy_reference():
                                     0.04, 40.0, 15.0, 1.5, 5.5, road, *empty.grid(10.0))
         count, deep = 0, 0.0
         for j in range(n_p * m):
-            k = 1 if j == 0 else max(1, math.ceil(np.hypot(*(lane[i, j] - lane[i, j - 1]))
-                                                 / _kernels.STEP_M))
-            t = np.arange(1, k + 1) / k
             jp = max(j - 1, 0)
-            s_sub = ref.s[i, jp] + t * (ref.s[i, j] - ref.s[i, jp])
-            z_sub = z[i, jp] + t * (z[i, j] - z[i, jp])
-            sub = (s_sub > 15.0) & (s_sub < ref.length[i] - 15.0) & (np.abs(z_sub - zl) < 5.5)
-            if sub.any():
+            # the part of the stretch outside the end zones (s is linear along it)
+            s0, s1, z0, z1 = ref.s[i, jp], ref.s[i, j], z[i, jp], z[i, j]
+            t = np.array([0.0 if j else 1.0, 1.0])
+            if s1 != s0:
+                lim = np.sort([(15.0 - s0) / (s1 - s0), (ref.length[i] - 15.0 - s0) / (s1 - s0)])
+                t = np.array([max(t[0], lim[0]), min(t[1], lim[1])])
+            elif not 15.0 < s0 < ref.length[i] - 15.0:
+                continue
+            if t[0] > t[1]:
+                continue
+            ze = z0 + t * (z1 - z0)
+            # deep in a band that covers the plane: the way out is up or down, shortest
+            # where the stretch comes nearest the road's height
+            near = 0.0 if (ze.min() <= zl <= ze.max()) else np.abs(ze - zl).min()
+            if near < 5.5:
                 count += 1
-                # deep in a band that covers the plane: the way out is up or down
-                deep += (5.5 - np.abs(z_sub[sub] - zl)).max()
+                deep += 5.5 - near
         assert count > 0 and got[6][0] == count
         assert got[7][0] == pytest.approx(deep, rel=1e-9)
 
@@ -313,9 +317,83 @@ def test_a_crossing_between_two_samples_is_still_a_conflict():
                      half_width=np.full(len(ys), 1.5), owner=("b",) * len(ys))
     args = (15.0, 1.5, 5.5, np.zeros((0, 9))) + obst.grid(10.0)
     n, depth = _kernels.conflicts(x, y, x - 0.5, np.zeros_like(x), np.array([100.0]), *args)
-    # steps of STEP_M from 50.5: the nearest comes within 1 m of it (reach widened by
-    # half the obstacle's point spacing: sqrt(3² + 1²))
-    assert n[0] == 1 and depth[0] == pytest.approx(math.sqrt(10.0) - 1.0)
+    # the stretch from 50.5 to 60.5 runs through the obstacle point at (55.5, 0): as deep
+    # as the reach (the two half widths widened by half the obstacle's point spacing:
+    # sqrt(3² + 1²))
+    assert n[0] == 1 and depth[0] == pytest.approx(math.sqrt(10.0))
     # 6 m above the other lane (clearance 5.5 m): no conflict
     n, _ = _kernels.conflicts(x, y, x - 0.5, np.full_like(x, 6.0), np.array([100.0]), *args)
     assert n[0] == 0
+
+
+def test_road_band_test_is_exact_along_the_whole_stretch():
+    """Against a road band the conflict kernel tests the whole straight stretch between
+    two samples: it finds what a very fine walk along it finds, and as deep (random
+    stretches across a tilted band, some grazing it, some at the clearance's edge)."""
+    from flyover.geometry import _kernels
+
+    rng = np.random.default_rng(7)
+    empty = Obstacles()
+    h = np.pi / 5
+    road = np.array([[3.0, -4.0, np.cos(h), np.sin(h), -30.0, 40.0, -7.5, 0.0, 6.5]])
+    t = np.linspace(0.0, 1.0, 100001)
+    hits = 0
+    for _ in range(300):
+        a, b = rng.uniform(-40, 40, 2), rng.uniform(-40, 40, 2)
+        za, zb = rng.uniform(0.0, 13.0, 2)
+        x = np.array([[a[0], b[0]]])
+        y = np.array([[a[1], b[1]]])
+        z = np.array([[za, zb]])
+        s = np.array([[100.0, 100.0 + np.hypot(*(b - a))]])
+        n, deep = _kernels.conflicts(x, y, s, z, np.array([1000.0]), 15.0, 1.5, 5.5, road,
+                                     *empty.grid(10.0))
+        # the same by a fine walk (the first sample stands for itself: it is never inside)
+        px, py = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+        pz = za + t * (zb - za)
+        rx, ry = px - road[0, 0], py - road[0, 1]
+        along = rx * road[0, 2] + ry * road[0, 3]
+        lat = road[0, 2] * ry - road[0, 3] * rx
+        way = np.minimum(np.minimum(lat + 9.0, 1.5 - lat), 5.5 - np.abs(pz - 6.5))
+        way = np.where((along > -30) & (along < 40), way, 0.0)
+        first = max(way[0], 0.0)  # sample 0 stands for itself, sample 1 for the stretch
+        walk = max(way.max(), 0.0)
+        hits += walk > 0.01
+        if walk == 0.0 or walk > 0.01:  # clear, or not just grazing between walk points
+            assert n[0] == int(first > 0) + int(walk > 0)
+            assert deep[0] == pytest.approx(first + walk, abs=0.01)
+    assert hits > 20
+
+
+def test_ramp_point_test_is_exact_along_the_whole_stretch():
+    """Against another ramp's lane-centre points the kernel also tests the whole stretch:
+    met exactly where a very fine walk along it comes within reach of a point at a
+    height within the clearance (random stretches across a climbing lane)."""
+    from flyover.geometry import _kernels
+
+    rng = np.random.default_rng(8)
+    xs = np.arange(-60.0, 60.0, _kernels.STEP_M)
+    pts = np.stack([xs, 0.3 * xs], -1)
+    pz = 6.0 + 0.05 * xs
+    obst = Obstacles(points=pts, z=pz, half_width=np.full(len(xs), 1.75),
+                     owner=("b",) * len(xs))
+    reach = math.sqrt((1.5 + 1.75) ** 2 + (_kernels.STEP_M / 2) ** 2)
+    t = np.linspace(0.0, 1.0, 20001)
+    hits = 0
+    for _ in range(300):
+        a, b = rng.uniform(-40, 40, 2), rng.uniform(-40, 40, 2)
+        za, zb = rng.uniform(0.0, 13.0, 2)
+        s = np.array([[100.0, 100.0 + np.hypot(*(b - a))]])
+        n, deep = _kernels.conflicts(np.array([[a[0], b[0]]]), np.array([[a[1], b[1]]]), s,
+                                     np.array([[za, zb]]), np.array([1000.0]), 15.0, 1.5, 5.5,
+                                     np.zeros((0, 9)), *obst.grid(10.0))
+        qx, qy = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+        qz = za + t * (zb - za)
+        d = np.hypot(qx[:, None] - pts[:, 0], qy[:, None] - pts[:, 1])
+        way = np.minimum(reach - d, 5.5 - np.abs(qz[:, None] - pz)).max(1)
+        first, walk = max(way[0], 0.0), max(way.max(), 0.0)
+        hits += walk > 0.01
+        if walk == 0.0 or walk > 0.01:  # clear, or not just grazing between walk points
+            assert n[0] == int(first > 0) + int(walk > 0)
+            # the depth is taken at the closest approach or the middle: at most the walk's
+            assert 0.0 < deep[0] - first <= walk + 0.01 or walk == 0.0
+    assert hits > 20

@@ -363,9 +363,9 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     from flyover.geometry import layout  # noqa: PLC0415
 
     t = catalog_topologies()["directional_t"]
-    lanes = {"A1": 5, "A2": 3, "B1": 5, "B2": 4}
-    feats = {"rA1": RampFeatures(60.0, 1.0), "rA2": RampFeatures(30.0, 3.0),
-             "rL": RampFeatures(280.0, 5.0), "rR": RampFeatures(150.0, 2.0)}
+    lanes = {"A1": 4, "A2": 5, "B1": 5, "B2": 3}
+    feats = {"rA1": RampFeatures(150.0, 5.0), "rA2": RampFeatures(30.0, 1.0),
+             "rL": RampFeatures(40.0, 2.0), "rR": RampFeatures(210.0, 1.0)}
     calls = []
     real = layout._reroute
 

@@ -1,4 +1,4 @@
-"""Compiled inner loop of the ramp objective (numba): same-level conflicts.
+"""Compiled inner loop of the ramp objective (numba): shape terms and same-level conflicts.
 
 :func:`conflicts` counts, per candidate ramp, the lane-centre samples that
 meet an obstacle at the same level (closer than ``clearance`` in height):
@@ -9,11 +9,12 @@ meet an obstacle at the same level (closer than ``clearance`` in height):
 * a sample of an already fitted ramp closer than the two half widths.
 
 Ramp samples sit in a uniform grid (:func:`grid`, cells at least twice the
-largest reach), so each candidate point looks at the 2 x 2 cells around the
-corner of its cell nearest to it.
-Between two samples a candidate's lane centre is followed in steps of at most
-:data:`STEP_M`, and obstacle ramps are sampled as densely, so that a crossing
-cannot slip between samples. Only the inner points count (``end_zone`` from
+largest reach, with their height ranges), so a stretch looks only at the cells
+next to its box whose heights come within the clearance of its own.
+Between two samples a candidate's lane centre is a straight stretch (height and
+station linear along it), tested exactly against road bands and obstacle ramp
+points (which lie at most :data:`STEP_M` apart), so that a crossing cannot slip
+between samples. Only the inner points count (``end_zone`` from
 either end, where a ramp leaves or joins its parent, is exempt).
 """
 
@@ -22,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["STEP_M", "grid", "conflicts"]
+__all__ = ["STEP_M", "grid", "cell_heights", "conflicts"]
 
 
 def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float, float, int, int]:
@@ -30,6 +31,7 @@ def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float
 
     Returns the point order (by cell), the first index of each cell in that
     order (``nx * ny + 1`` entries), the grid origin and its size in cells.
+    See :func:`cell_heights` for the cells' height ranges.
     """
     if len(points) == 0:
         return np.zeros(0, np.int64), np.zeros(2, np.int64), 0.0, 0.0, 1, 1
@@ -43,9 +45,20 @@ def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float
     return order, starts.astype(np.int64), float(x0), float(y0), nx, ny
 
 
-#: longest step (m) between the points where a candidate's lane centre is tested for
-#: conflicts: between two samples the lane centre is followed in steps this short, so a
-#: crossing (at least the two half widths long) cannot slip between samples
+def cell_heights(z_sorted: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest height of the points in each cell (``z_sorted`` in the
+    order of :func:`grid`; empty cells get ``+inf``, ``-inf``): a stretch clear of a
+    cell's range by the clearance cannot meet any of its points."""
+    cells = len(starts) - 1
+    lo, hi = np.full(cells, np.inf), np.full(cells, -np.inf)
+    full = starts[1:] > starts[:-1]
+    if full.any():
+        lo[full] = np.minimum.reduceat(z_sorted, starts[:-1][full])
+        hi[full] = np.maximum.reduceat(z_sorted, starts[:-1][full])
+    return lo, hi
+
+
+#: longest spacing (m) of an obstacle ramp's lane-centre points (see layout's record)
 STEP_M = 2.0
 #: an obstacle ramp's points are STEP_M apart, so a point within the two half widths of
 #: its lane centre line may lie up to STEP_M / 2 along it from the nearest one: the
@@ -54,98 +67,141 @@ _ALONG2 = (STEP_M / 2) ** 2
 
 
 @njit(cache=True, inline="always")
-def _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw, starts, x0, y0, cell, nx,
-              ny):  # pragma: no cover - compiled
-    """How deep the lane-centre point ``x, y, zz`` is in whatever it meets (0: clear)."""
-    deep = 0.0
-    for k in range(lines.shape[0]):
-        dz = clearance - abs(zz - lines[k, 8])
-        if dz <= 0.0:
-            continue
-        rx, ry = x - lines[k, 0], y - lines[k, 1]
-        along = rx * lines[k, 2] + ry * lines[k, 3]
-        if along <= lines[k, 4] or along >= lines[k, 5]:
-            continue
-        lat = lines[k, 2] * ry - lines[k, 3] * rx
-        lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
-        if lat > lo and lat < hi:
-            deep = max(deep, min(dz, lat - lo, hi - lat))
-    if px.shape[0] > 0:
-        # cells are at least the reach wide: the 2 x 2 cells around the corner of the
-        # point's cell nearest to it hold everything within reach
-        fx = (x - x0) / cell
-        fy = (y - y0) / cell
-        gx = int(np.floor(fx))
-        gy = int(np.floor(fy))
-        ax = gx - 1 if fx - gx < 0.5 else gx
-        ay = gy - 1 if fy - gy < 0.5 else gy
-        for ix in range(max(ax, 0), min(ax + 2, nx)):
-            for iy in range(max(ay, 0), min(ay + 2, ny)):
-                c = ix * ny + iy
-                for j in range(starts[c], starts[c + 1]):
-                    dz = clearance - abs(zz - pz[j])
-                    if dz <= 0.0:
-                        continue
-                    dx, dy = x - px[j], y - py[j]
-                    r = np.sqrt((hw + phw[j]) ** 2 + _ALONG2)
-                    d2 = dx * dx + dy * dy
-                    if d2 < r * r:
-                        deep = max(deep, min(dz, r - np.sqrt(d2)))
-    return deep
+def _clip(v0, dv, lo, hi, tl, th):  # pragma: no cover - compiled
+    """The part of ``[tl, th]`` where ``lo < v0 + dv t < hi`` (empty: ``tl > th``)."""
+    if dv == 0.0:
+        if v0 <= lo or v0 >= hi:
+            return 1.0, 0.0
+        return tl, th
+    t1, t2 = (lo - v0) / dv, (hi - v0) / dv
+    if t1 > t2:
+        t1, t2 = t2, t1
+    return max(tl, t1), min(th, t2)
 
 
 @njit(cache=True, inline="always")
-def _near(xa, ya, za, xb, yb, zb, hw, clearance, lines, n_points, starts, x0, y0, cell, nx,
-          ny):  # pragma: no cover - compiled
-    """Whether anything could be met on the straight stretch from ``a`` to ``b``: a road
-    band it enters (exact: along, across and height are linear along the stretch) or a
-    grid cell with obstacle ramp points next to its bounding box."""
-    for k in range(lines.shape[0]):
-        zk = lines[k, 8]
-        if (za - zk >= clearance and zb - zk >= clearance) or \
-                (zk - za >= clearance and zk - zb >= clearance):
-            continue
-        ra, rb = (xa - lines[k, 0], ya - lines[k, 1]), (xb - lines[k, 0], yb - lines[k, 1])
-        al_a = ra[0] * lines[k, 2] + ra[1] * lines[k, 3]
-        al_b = rb[0] * lines[k, 2] + rb[1] * lines[k, 3]
-        if (al_a <= lines[k, 4] and al_b <= lines[k, 4]) or \
-                (al_a >= lines[k, 5] and al_b >= lines[k, 5]):
-            continue
-        la = lines[k, 2] * ra[1] - lines[k, 3] * ra[0]
-        lb = lines[k, 2] * rb[1] - lines[k, 3] * rb[0]
-        lo, hi = lines[k, 6] - hw, lines[k, 7] + hw
-        if (la <= lo and lb <= lo) or (la >= hi and lb >= hi):
-            continue
-        return True
-    if n_points == 0:
-        return False
+def _least(c, m, t):  # pragma: no cover - compiled
+    """The least of the four linear functions ``c[k] + m[k] t`` at ``t``."""
+    return min(min(c[0] + m[0] * t, c[1] + m[1] * t), min(c[2] + m[2] * t, c[3] + m[3] * t))
+
+
+@njit(cache=True, inline="always")
+def _band_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, row, s_lo,
+                s_hi):  # pragma: no cover - compiled
+    """How deep the stretch ``a + t (b - a)``, ``t0 <= t <= 1``, gets into a road's band
+    ``row`` (0: clear), counting only points with stations in ``(s_lo, s_hi)``.
+
+    Along, across, height and station are linear in ``t``: the points inside the
+    band and the end zones' limits form an interval, and the depth (the least of
+    the two ways out sideways and the two ways out up/down, a concave piecewise
+    linear function) is largest at an end of it or where two of those ways meet.
+    """
+    dz0 = row[8]
+    if (za - dz0 >= clearance and zb - dz0 >= clearance) or \
+            (dz0 - za >= clearance and dz0 - zb >= clearance):
+        return 0.0
+    rxa, rya, rxb, ryb = xa - row[0], ya - row[1], xb - row[0], yb - row[1]
+    al_a = rxa * row[2] + rya * row[3]
+    al_b = rxb * row[2] + ryb * row[3]
+    tl, th = _clip(al_a, al_b - al_a, row[4], row[5], t0, 1.0)
+    if tl > th:
+        return 0.0
+    la = row[2] * rya - row[3] * rxa
+    lb = row[2] * ryb - row[3] * rxb
+    lo, hi = row[6] - hw, row[7] + hw
+    tl, th = _clip(la, lb - la, lo, hi, tl, th)
+    if tl > th:
+        return 0.0
+    tl, th = _clip(sa, sb - sa, s_lo, s_hi, tl, th)
+    if tl > th:
+        return 0.0
+    # the ways out, c[k] + m[k] t: up, down, to either side
+    c = (clearance - (za - dz0), clearance + (za - dz0), la - lo, hi - la)
+    m = (-(zb - za), zb - za, lb - la, -(lb - la))
+    best = max(0.0, _least(c, m, tl), _least(c, m, th))
+    for i in range(4):  # where two ways out meet inside the interval
+        for j in range(i + 1, 4):
+            if m[i] != m[j]:
+                t = (c[j] - c[i]) / (m[i] - m[j])
+                if tl < t < th:
+                    best = max(best, _least(c, m, t))
+    return best
+
+
+@njit(cache=True, inline="always")
+def _points_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, px, py, pz, phw, starts,
+                  x0, y0, cell, nx, ny, zlo, zhi, s_lo, s_hi):  # pragma: no cover - compiled
+    """How deep the stretch ``a + t (b - a)``, ``t0 <= t <= 1``, gets into the obstacle
+    ramps' lanes (0: clear), counting only points with stations in ``(s_lo, s_hi)``.
+
+    An obstacle point is met where the stretch passes closer than the reach (the
+    two half widths, widened by half the points' spacing, :data:`_ALONG2`) and
+    less than the clearance apart in height: an interval of ``t`` (a quadratic
+    and a linear condition), found exactly. The depth there (the lesser of the
+    ways out, sideways and up/down) is taken at the closest approach within that
+    interval or at its middle, whichever is deeper: always positive inside it.
+    """
+    tl, th = _clip(sa, sb - sa, s_lo, s_hi, t0, 1.0)
+    if tl > th:
+        return 0.0
+    ex, ey, ez = xb - xa, yb - ya, zb - za
+    l2 = ex * ex + ey * ey
+    # cells are at least twice the reach wide: the cells next to the stretch's box
     gx0 = max(int(np.floor((min(xa, xb) - x0) / cell)) - 1, 0)
     gx1 = min(int(np.floor((max(xa, xb) - x0) / cell)) + 1, nx - 1)
     gy0 = max(int(np.floor((min(ya, yb) - y0) / cell)) - 1, 0)
     gy1 = min(int(np.floor((max(ya, yb) - y0) / cell)) + 1, ny - 1)
+    z_lo, z_hi = min(za, zb), max(za, zb)
+    deep = 0.0
     for ix in range(gx0, gx1 + 1):
         for iy in range(gy0, gy1 + 1):
             c = ix * ny + iy
-            if starts[c + 1] > starts[c]:
-                return True
-    return False
+            if z_lo - zhi[c] >= clearance or zlo[c] - z_hi >= clearance:
+                continue
+            for j in range(starts[c], starts[c + 1]):
+                dx, dy = xa - px[j], ya - py[j]
+                r2 = (hw + phw[j]) ** 2 + _ALONG2
+                dd = dx * dx + dy * dy
+                de = dx * ex + dy * ey
+                if l2 > 0.0:
+                    disc = de * de - l2 * (dd - r2)
+                    if disc <= 0.0:
+                        continue
+                    sq = np.sqrt(disc)
+                    u1, u2 = max(tl, (-de - sq) / l2), min(th, (-de + sq) / l2)
+                    t_near = -de / l2
+                else:
+                    if dd >= r2:
+                        continue
+                    u1, u2, t_near = tl, th, th
+                u1, u2 = _clip(za - pz[j], ez, -clearance, clearance, u1, u2)
+                if u1 > u2:
+                    continue
+                t_near = min(max(t_near, u1), u2)
+                for t in (t_near, 0.5 * (u1 + u2)):
+                    qx, qy = dx + t * ex, dy + t * ey
+                    d = min(clearance - abs(za - pz[j] + t * ez),
+                            np.sqrt(r2) - np.sqrt(qx * qx + qy * qy))
+                    deep = max(deep, d)
+    return deep
 
 
 @njit(cache=True, nogil=True)
 def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
-              px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover - compiled
+              px, py, pz, phw, starts, x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover - compiled
     """Conflicting inner samples per candidate ``(P,)`` from samples ``(P, N)``, and
     how deep they are in (``(P,)``, metres summed over the conflicting samples).
 
-    Sample ``i`` stands for the stretch of lane centre from sample ``i - 1`` to it,
-    followed in straight steps of at most :data:`STEP_M` (heights and stations
-    interpolated): it conflicts when any point of that stretch outside the end
-    zones does. A point's depth is the least it would have to move to be clear
-    of all it meets: sideways (out of a road's band or a ramp's lane) or up/down
-    (to the clearance), whichever is less, the largest over what it meets; a
-    sample's depth is the largest over its stretch. It grades the penalty inside
-    a conflict, which the count alone leaves flat. ``px, py, pz, phw``: obstacle
-    ramp samples sorted by grid cell (``starts`` per cell, see :func:`grid`);
+    Sample ``i`` stands for the stretch of lane centre from sample ``i - 1`` to it
+    (heights and stations linear along it): it conflicts when any point of that
+    stretch outside the end zones does, tested exactly against road bands
+    (:func:`_band_depth`) and obstacle ramp points (:func:`_points_depth`). A point's depth is the least it would
+    have to move to be clear of all it meets: sideways (out of a road's band or a
+    ramp's lane) or up/down (to the clearance), whichever is less, the largest over
+    what it meets; a sample's depth is the largest over its stretch. It grades the
+    penalty inside a conflict, which the count alone leaves flat. ``px, py, pz,
+    phw``: obstacle ramp samples sorted by grid cell (``starts`` per cell, see
+    :func:`grid`; ``zlo, zhi`` their height range per cell, :func:`cell_heights`);
     they should lie no more than :data:`STEP_M` apart along their ramps.
     """
     p_count, n = cx.shape
@@ -154,26 +210,18 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
     for p in range(p_count):
         hi_s = length[p] - end_zone
         for i in range(n):
-            steps = 1
-            if i > 0:
-                if not _near(cx[p, i - 1], cy[p, i - 1], z[p, i - 1], cx[p, i], cy[p, i],
-                             z[p, i], hw, clearance, lines, px.shape[0], starts, x0, y0,
-                             cell, nx, ny):
-                    continue
-                seg = np.hypot(cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1])
-                steps = max(1, int(np.ceil(seg / STEP_M)))
-            deep = 0.0
             a = max(i - 1, 0)  # the stretch's start (sample 0 stands for itself)
-            for q in range(1, steps + 1):
-                t = q / steps
-                si = s[p, a] + t * (s[p, i] - s[p, a])
-                if si <= end_zone or si >= hi_s:
-                    continue
-                x = cx[p, a] + t * (cx[p, i] - cx[p, a])
-                y = cy[p, a] + t * (cy[p, i] - cy[p, a])
-                zz = z[p, a] + t * (z[p, i] - z[p, a])
-                deep = max(deep, _depth_at(x, y, zz, hw, clearance, lines, px, py, pz, phw,
-                                           starts, x0, y0, cell, nx, ny))
+            t0 = 0.0 if i > 0 else 1.0
+            deep = 0.0
+            for k in range(lines.shape[0]):
+                deep = max(deep, _band_depth(cx[p, a], cy[p, a], z[p, a], s[p, a], cx[p, i],
+                                             cy[p, i], z[p, i], s[p, i], t0, hw, clearance,
+                                             lines[k], end_zone, hi_s))
+            if px.shape[0] > 0:
+                deep = max(deep, _points_depth(cx[p, a], cy[p, a], z[p, a], s[p, a],
+                                               cx[p, i], cy[p, i], z[p, i], s[p, i], t0, hw,
+                                               clearance, px, py, pz, phw, starts, x0, y0,
+                                               cell, nx, ny, zlo, zhi, end_zone, hi_s))
             if deep > 0.0:
                 out[p] += 1
                 depth[p] += deep
@@ -197,9 +245,93 @@ def _climb(s, h, grade, transition):  # pragma: no cover - compiled
     return h - grade * (d - s) ** 2 / (2.0 * t)
 
 
+@njit(cache=True, inline="always")
+def _step_angle(c, d):  # pragma: no cover - compiled
+    """``arctan2(c, d)``: the heading change between two tangents (``c`` their cross,
+    ``d`` their dot product). Steps between samples are mostly small: there the odd
+    series to x^9 (error below 1e-10 rad for |x| <= 0.1) replaces the library call."""
+    if d > 0.0 and abs(c) <= 0.1 * d:
+        x = c / d
+        x2 = x * x
+        return x * (1.0 - x2 * (1.0 / 3.0 - x2 * (0.2 - x2 * (1.0 / 7.0 - x2 / 9.0))))
+    return np.arctan2(c, d)
+
+
+@njit(cache=True, inline="always")
+def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover - compiled
+    """What :func:`spline_terms` measures on one candidate's pieces ``ctrl`` ``(n, 4, 2)``
+    without the conflicts: length, minimum lane radius, turning, curvature variance,
+    mean squared curvature, joint jumps. Fills the samples (``m`` per piece at
+    parameters ``t``) the conflicts are counted on: reference line ``xs, ys``,
+    tangent ``tx, ty``, speed ``sp``, station ``ss`` (see :func:`_lane`); ``kap``
+    is scratch."""
+    n_p = ctrl.shape[0]
+    n = n_p * m
+    off = 0.0
+    for k in range(n_p):
+        q = ctrl[k]
+        for i in range(m):
+            u = t[i]
+            v = 1.0 - u
+            b0, b1, b2, b3 = v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u
+            d0, d1, d2, d3 = -3 * v * v, 3 * v * v - 6 * v * u, 6 * v * u - 3 * u * u, 3 * u * u
+            e0, e1, e2, e3 = 6 * v, -12 * v + 6 * u, 6 * v - 12 * u, 6 * u
+            j = k * m + i
+            xs[j] = b0 * q[0, 0] + b1 * q[1, 0] + b2 * q[2, 0] + b3 * q[3, 0]
+            ys[j] = b0 * q[0, 1] + b1 * q[1, 1] + b2 * q[2, 1] + b3 * q[3, 1]
+            dx = d0 * q[0, 0] + d1 * q[1, 0] + d2 * q[2, 0] + d3 * q[3, 0]
+            dy = d0 * q[0, 1] + d1 * q[1, 1] + d2 * q[2, 1] + d3 * q[3, 1]
+            ex = e0 * q[0, 0] + e1 * q[1, 0] + e2 * q[2, 0] + e3 * q[3, 0]
+            ey = e0 * q[0, 1] + e1 * q[1, 1] + e2 * q[2, 1] + e3 * q[3, 1]
+            tx[j], ty[j] = dx, dy
+            speed = np.sqrt(dx * dx + dy * dy)
+            sp[j] = speed
+            sm = max(speed, 1e-9)
+            kap[j] = (dx * ey - dy * ex) / (sm * sm * sm)
+            if i > 0:
+                off += 0.5 * (speed + sp[j - 1]) / (m - 1)
+            ss[j] = off
+    rmin = np.inf
+    turn = 0.0
+    mean = 0.0
+    k2 = 0.0
+    for j in range(n):
+        kj = kap[j]
+        mean += kj
+        k2 += kj * kj
+        r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
+        if r < rmin:
+            rmin = r
+        if j > 0:  # the heading change from the previous sample
+            turn += _step_angle(tx[j - 1] * ty[j] - ty[j - 1] * tx[j],
+                                tx[j - 1] * tx[j] + ty[j - 1] * ty[j])
+    mean /= n
+    k2 /= n
+    g2 = 0.0
+    for k in range(1, n_p):
+        g2 += (kap[k * m] - kap[k * m - 1]) ** 2
+    return off, rmin, turn, max(k2 - mean * mean, 0.0), k2, g2
+
+
+@njit(cache=True, inline="always")
+def _lane(xs, ys, tx, ty, sp, ss, length, width, za, zc, zb, grade, transition, cx, cy,
+          zz):  # pragma: no cover - compiled
+    """A candidate's lane centre (``cx, cy`` row 0) and heights on its grade line
+    (``zz`` row 0) at the samples of :func:`_shape`."""
+    hr, hf = abs(zc - za), abs(zc - zb)
+    sr = 1.0 if zc > za else (-1.0 if zc < za else 0.0)
+    sf = 1.0 if zb > zc else (-1.0 if zb < zc else 0.0)
+    for j in range(xs.shape[0]):
+        half = 0.5 * width / max(sp[j], 1e-9)
+        cx[0, j] = xs[j] + half * ty[j]
+        cy[0, j] = ys[j] - half * tx[j]
+        zz[0, j] = (za + sr * _climb(ss[j], hr, grade, transition)
+                    + sf * (hf - _climb(length - ss[j], hf, grade, transition)))
+
+
 @njit(cache=True, nogil=True)
 def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, clearance,
-                 lines, px, py, pz, phw, starts, x0, y0, cell, nx, ny):  # pragma: no cover
+                 lines, px, py, pz, phw, starts, x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover
     """Everything the ramp objective measures on candidate splines ``ctrl`` ``(P, n, 4, 2)``.
 
     Samples each cubic piece at ``m`` parameter values (as
@@ -209,88 +341,29 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
     of conflicting samples and their depth (:func:`conflicts`; heights from the grade line of
     :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``).
     """
-    p_count, n_p = ctrl.shape[0], ctrl.shape[1]
-    n = n_p * m
-    length = np.zeros(p_count)
-    rmin = np.full(p_count, np.inf)
-    turn = np.zeros(p_count)
-    kvar = np.zeros(p_count)
-    k2 = np.zeros(p_count)
-    g2 = np.zeros(p_count)
+    p_count, n = ctrl.shape[0], ctrl.shape[1] * m
+    out = np.zeros((6, p_count))
     conf = np.zeros(p_count, np.int64)
     deep = np.zeros(p_count)
     t = np.linspace(0.0, 1.0, m)
-    xs = np.empty(n)
-    ys = np.empty(n)
-    tx = np.empty(n)
-    ty = np.empty(n)
-    sp = np.empty(n)
-    kap = np.empty(n)
-    ss = np.empty(n)
+    xs, ys, tx, ty, sp, kap = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                               np.empty(n), np.empty(n))
+    ss = np.empty((1, n))
     cx = np.empty((1, n))
     cy = np.empty((1, n))
     zz = np.empty((1, n))
-    s1 = np.empty((1, n))
     ln = np.empty(1)
     for p in range(p_count):
-        off = 0.0
-        for k in range(n_p):
-            q = ctrl[p, k]
-            for i in range(m):
-                u = t[i]
-                v = 1.0 - u
-                b0, b1, b2, b3 = v * v * v, 3 * v * v * u, 3 * v * u * u, u * u * u
-                d0, d1, d2, d3 = -3 * v * v, 3 * v * v - 6 * v * u, 6 * v * u - 3 * u * u, 3 * u * u
-                e0, e1, e2, e3 = 6 * v, -12 * v + 6 * u, 6 * v - 12 * u, 6 * u
-                j = k * m + i
-                xs[j] = b0 * q[0, 0] + b1 * q[1, 0] + b2 * q[2, 0] + b3 * q[3, 0]
-                ys[j] = b0 * q[0, 1] + b1 * q[1, 1] + b2 * q[2, 1] + b3 * q[3, 1]
-                dx = d0 * q[0, 0] + d1 * q[1, 0] + d2 * q[2, 0] + d3 * q[3, 0]
-                dy = d0 * q[0, 1] + d1 * q[1, 1] + d2 * q[2, 1] + d3 * q[3, 1]
-                ex = e0 * q[0, 0] + e1 * q[1, 0] + e2 * q[2, 0] + e3 * q[3, 0]
-                ey = e0 * q[0, 1] + e1 * q[1, 1] + e2 * q[2, 1] + e3 * q[3, 1]
-                tx[j], ty[j] = dx, dy
-                speed = np.hypot(dx, dy)
-                sp[j] = speed
-                kap[j] = (dx * ey - dy * ex) / max(speed, 1e-9) ** 3
-                if i == 0:
-                    ss[j] = off
-                else:
-                    off += 0.5 * (speed + sp[j - 1]) / (m - 1)
-                    ss[j] = off
-        length[p] = off
-        mean = 0.0
-        for j in range(n):
-            kj = kap[j]
-            mean += kj
-            k2[p] += kj * kj
-            r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
-            if r < rmin[p]:
-                rmin[p] = r
-            if j > 0:  # the heading change from the previous sample
-                turn[p] += np.arctan2(tx[j - 1] * ty[j] - ty[j - 1] * tx[j],
-                                      tx[j - 1] * tx[j] + ty[j - 1] * ty[j])
-        mean /= n
-        k2[p] /= n
-        kvar[p] = k2[p] - mean * mean
-        for k in range(1, n_p):
-            g2[p] += (kap[k * m] - kap[k * m - 1]) ** 2
-        hr, hf = abs(zc[p] - za[p]), abs(zc[p] - zb[p])
-        sr = 1.0 if zc[p] > za[p] else (-1.0 if zc[p] < za[p] else 0.0)
-        sf = 1.0 if zb[p] > zc[p] else (-1.0 if zb[p] < zc[p] else 0.0)
-        for j in range(n):
-            half = 0.5 * width / max(sp[j], 1e-9)
-            cx[0, j] = xs[j] + half * ty[j]
-            cy[0, j] = ys[j] - half * tx[j]
-            s1[0, j] = ss[j]
-            zz[0, j] = (za[p] + sr * _climb(ss[j], hr, grade, transition)
-                        + sf * (hf - _climb(off - ss[j], hf, grade, transition)))
-        ln[0] = off
-        count, dp = conflicts(cx, cy, s1, zz, ln, end_zone, hw, clearance, lines,
-                              px, py, pz, phw, starts, x0, y0, cell, nx, ny)
-        conf[p], deep[p] = count[0], dp[0]
-    kvar = np.maximum(kvar, 0.0)
-    return length, rmin, turn, kvar, k2, g2, conf, deep
+        r = _shape(ctrl[p], m, width, t, xs, ys, tx, ty, sp, ss[0], kap)
+        for k in range(6):
+            out[k, p] = r[k]
+        _lane(xs, ys, tx, ty, sp, ss[0], r[0], width, za[p], zc[p], zb[p], grade, transition,
+              cx, cy, zz)
+        ln[0] = r[0]
+        c, d = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw,
+                         starts, x0, y0, cell, nx, ny, zlo, zhi)
+        conf[p], deep[p] = c[0], d[0]
+    return out[0], out[1], out[2], out[3], out[4], out[5], conf, deep
 
 
 @njit(cache=True, inline="always")
@@ -421,11 +494,21 @@ def _climb_distance(h, grade, transition):  # pragma: no cover - compiled
     return h / grade + min(transition, h / grade)
 
 
+@njit(cache=True, inline="always")
+def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no cover
+    """The ramp objective of candidate ``p`` from its terms ``t`` (rows :data:`TERMS`)."""
+    return (100.0 * t[0, p] ** 2 + 0.05 * t[1, p] + 20.0 * t[2, p] ** 2
+            + 10.0 * max(t[5, p] - 0.05, 0.0)
+            + conflict_weight * (t[7, p] + depth_weight * t[8, p])
+            + 0.01 * min(t[6, p], 10.0) + 2.0 * t[3, p] ** 2
+            + compact_weight * t[4, p])
+
+
 @njit(cache=True, nogil=True)
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
                     z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, nx, ny):  # pragma: no cover - compiled
+                    x0, y0, cell, nx, ny, zlo, zhi, weights, bound):  # pragma: no cover - compiled
     """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
@@ -438,6 +521,13 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     start / end station counts), the turn error, the curvature jumps at joints
     (scaled like smoothness), conflicting samples and their depth. The crest is
     the higher end or ``z_crest`` (``-inf``: none).
+
+    ``bound`` ``(P,)``: a candidate whose energy (:func:`energy` with ``weights``)
+    without its conflicts already exceeds its bound is not searched for conflicts
+    (the costly part): its conflicts are ``inf`` (depth 0), so it is never acceptable
+    and its energy is ``inf``. With its conflicts the energy could only be higher (rounded
+    sums are monotone), so a DE trial beaten this way loses to its parent exactly
+    as it would have.
     """
     ctrl, st, poses, turn = decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off,
                                    free_mode, free_z, leads)
@@ -446,38 +536,56 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     zb = poses[1, 3].copy()
     zc = np.maximum(np.maximum(za, zb), z_crest)
     g = grade if grade > 0 else 1.0
-    length, rmin, turned, kvar, k2, g2, conf, depth = spline_terms(
-        ctrl, m, width, za, zc, zb, g, transition, end_zone, hw, clearance, lines,
-        px, py, pz, phw, starts, x0, y0, cell, nx, ny)
+    n = ctrl.shape[1] * m
+    t = np.linspace(0.0, 1.0, m)
+    xs, ys, tx, ty, sp, kap = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                               np.empty(n), np.empty(n))
+    ss = np.empty((1, n))
+    cx = np.empty((1, n))
+    cy = np.empty((1, n))
+    zz = np.empty((1, n))
+    ln = np.empty(1)
     out = np.empty((9, p_count))
     inf_target = np.isinf(r_target)
     r_eff = min(r_target, inf_ref)
     for p in range(p_count):
+        length, rmin, turned, kvar, k2, g2 = _shape(ctrl[p], m, width, t, xs, ys, tx, ty, sp,
+                                                    ss[0], kap)
         if grade > 0:
             need = _climb_distance(zc[p] - za[p], grade, transition) + \
                 _climb_distance(zc[p] - zb[p], grade, transition)
-            shortfall = max(need - length[p], 0.0) / max(need, 1.0)
+            shortfall = max(need - length, 0.0) / max(need, 1.0)
         else:
             need = 0.0
             shortfall = 1.0 if abs(za[p] - zb[p]) > 1e-6 else 0.0
         if inf_target:
-            out[0, p] = min(rmin[p] - inf_floor, 0.0) / inf_floor
-            out[1, p] = k2[p] * inf_ref ** 2
-            out[6, p] = g2[p] * inf_ref ** 2
+            out[0, p] = min(rmin - inf_floor, 0.0) / inf_floor
+            out[1, p] = k2 * inf_ref ** 2
+            out[6, p] = g2 * inf_ref ** 2
         else:
-            out[0, p] = (rmin[p] - r_target) / r_target
-            out[1, p] = kvar[p] * r_target ** 2
-            out[6, p] = g2[p] * r_target ** 2
+            out[0, p] = (rmin - r_target) / r_target
+            out[1, p] = kvar * r_target ** 2
+            out[6, p] = g2 * r_target ** 2
         chord = 0.0
         if abs(turn[p]) < 0.3:  # straight-on ramps only
             chord = np.hypot(poses[1, 0, p] - poses[0, 0, p], poses[1, 1, p] - poses[0, 1, p])
         l_ref = 1.2 * max(max(need, chord), r_eff * abs(turn[p]) + 2 * transition)
         out[2, p] = shortfall
-        out[3, p] = max(length[p] / l_ref - 1.0, 0.0)
+        out[3, p] = max(length / l_ref - 1.0, 0.0)
         out[4, p] = spread_a * (st[0, p] / compact_m) ** 2 + spread_b * (st[1, p] / compact_m) ** 2
-        out[5, p] = abs(turned[p] - turn[p])
-        out[7, p] = conf[p]
-        out[8, p] = depth[p]
+        out[5, p] = abs(turned - turn[p])
+        out[7, p] = 0.0
+        out[8, p] = 0.0
+        if _energy1(out, p, weights[0], weights[1], weights[2]) > bound[p]:
+            out[7, p] = np.inf
+            continue
+        _lane(xs, ys, tx, ty, sp, ss[0], length, width, za[p], zc[p], zb[p], g, transition,
+              cx, cy, zz)
+        ln[0] = length
+        conf, depth = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz,
+                                phw, starts, x0, y0, cell, nx, ny, zlo, zhi)
+        out[7, p] = conf[0]
+        out[8, p] = depth[0]
     return out
 
 
@@ -487,11 +595,7 @@ def energy(terms, conflict_weight, depth_weight, compact_weight):  # pragma: no 
     p_count = terms.shape[1]
     out = np.empty(p_count)
     for p in range(p_count):
-        out[p] = (100.0 * terms[0, p] ** 2 + 0.05 * terms[1, p] + 20.0 * terms[2, p] ** 2
-                  + 10.0 * max(terms[5, p] - 0.05, 0.0)
-                  + conflict_weight * (terms[7, p] + depth_weight * terms[8, p])
-                  + 0.01 * min(terms[6, p], 10.0) + 2.0 * terms[3, p] ** 2
-                  + compact_weight * terms[4, p])
+        out[p] = _energy1(terms, p, conflict_weight, depth_weight, compact_weight)
     return out
 
 

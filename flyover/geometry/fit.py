@@ -46,7 +46,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import differential_evolution
-from scipy.spatial import cKDTree
 
 from flyover.geometry import _kernels
 from flyover.geometry.bezier import heading_vec, lane_centre, lane_radius, sample_spline
@@ -138,10 +137,11 @@ class Obstacles:
         if cell not in cache:
             order, starts, x0, y0, nx, ny = _kernels.grid(self.points, cell)
             pts = np.ascontiguousarray(self.points[order])
-            cache[cell] = (np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]),
-                           np.ascontiguousarray(self.z[order], float),
+            z = np.ascontiguousarray(self.z[order], float)
+            cache[cell] = (np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1]), z,
                            np.ascontiguousarray(self.half_width[order], float),
-                           starts, x0, y0, float(cell), nx, ny)
+                           starts, x0, y0, float(cell), nx, ny,
+                           *_kernels.cell_heights(z, starts))
         return cache[cell]
 
 
@@ -331,6 +331,8 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     for stopping and reports. ``f.table(x)`` gives the terms as rows
     (:data:`_kernels.TERMS`), ``f.energy(table)`` and ``f.acceptable(table)``
     the energies and which candidates meet the targets; all compiled.
+    ``f.table(x, bound)`` skips the conflict search of candidates whose other
+    terms already put their energy above ``bound`` (their energy is then ``inf``).
     """
     g = spec.target_slope_pct / 100.0
     stub = spec.free is not None
@@ -346,9 +348,12 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
             *_obstacle_args(spec, obstacles, settings))
     weights = (float(settings.conflict_weight), float(settings.depth_weight),
                float(settings.compact_weight))
+    w = np.array(weights)
 
-    def table(x: np.ndarray) -> np.ndarray:
-        return _kernels.objective_terms(np.ascontiguousarray(x, float), *args)
+    def table(x: np.ndarray, bound: np.ndarray | None = None) -> np.ndarray:
+        x = np.ascontiguousarray(x, float)
+        b = np.full(x.shape[1], np.inf) if bound is None else np.ascontiguousarray(bound, float)
+        return _kernels.objective_terms(x, *args, w, b)
 
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
         return dict(zip(_kernels.TERMS, table(x)))
@@ -388,9 +393,12 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
     the first rows of the Latin-hypercube start. After each generation
     ``stop(population, energies, gen)`` may end the search: ``True`` returns
     the best candidate, an index returns that candidate, ``None`` goes on.
-    Deterministic for a seed.
+    If ``f.bounded``, trials are evaluated as ``f(trials, parent_energies)``: a trial
+    that cannot beat its parent may be given any energy above its parent's (it is
+    discarded all the same). Deterministic for a seed.
     """
     rng = np.random.default_rng(seed)
+    bounded = getattr(f, "bounded", False)
     lo = np.array([b[0] for b in bounds_], float)
     hi = np.array([b[1] for b in bounds_], float)
     span = np.where(hi > lo, hi - lo, 1.0)
@@ -416,7 +424,7 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
         u = rng.random((n, d + 9))
         trial, cr, fm = _kernels.jade_trial(pop, energy, archive, n_arch, u, mu_cr, mu_f,
                                             n_best, lo, hi)
-        e_trial = np.asarray(f(trial.T), float)
+        e_trial = np.asarray(f(trial.T, energy) if bounded else f(trial.T), float)
         evals += n
         n_arch, mu_cr, mu_f = _kernels.jade_select(pop, energy, trial, e_trial, cr, fm, archive,
                                                    n_arch, u[:, d + 8], mu_cr, mu_f, c)
@@ -457,13 +465,14 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
     # checked again on fine samples (the lowest-energy few of the population, see stop)
     coarse_good: set[bytes] = set()
 
-    def counted(x: np.ndarray) -> np.ndarray:
+    def counted(x: np.ndarray, bound: np.ndarray | None = None) -> np.ndarray:
         count[0] += x.shape[1]
-        t = f.table(x)
+        t = f.table(x, bound)
         for j in np.flatnonzero(f.acceptable(t)):
             coarse_good.add(np.ascontiguousarray(x[:, j]).tobytes())
         return f.energy(t)
 
+    counted.bounded = True  # see evolve: trials worse than their parents skip conflicts
     fine = None if settings.samples >= 64 else \
         ramp_objective(spec, obstacles, replace(settings, samples=64))[0]
 
@@ -559,61 +568,27 @@ def recount(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> RampFi
 def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> dict[str, int]:
     """What a fitted ramp meets at the same level: obstacle name → samples (as measured).
 
-    The same test as the search's (lane-centre samples, 64 per piece, each standing
-    for the stretch from the previous one, followed in steps of at most
-    :data:`_kernels.STEP_M`, outside the end zones; a road's band or a ramp's lane
-    closer than the two half widths and less than the clearance apart in height),
-    in numpy, naming the road or ramp.
+    The search's own test (:func:`_kernels.conflicts` on 64 lane-centre samples per
+    piece, as :func:`recount`), run against one road or one ramp at a time.
     """
     from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
 
     coarse = sample_spline(fit.ctrl, 64)
-    s0 = coarse.s.ravel()
-    cx0, cy0 = lane_centre(coarse.xy, coarse.tangent, fit.spec.width_m)
-    z0, _ = evaluate_polys(fit.elevation, s0)
-    # the stretch of each sample from the previous one, as the kernel follows it
-    seg = np.hypot(np.diff(cx0), np.diff(cy0))
-    steps = np.concatenate([[1], np.maximum(1, np.ceil(seg / _kernels.STEP_M)).astype(int)])
-    owner_i = np.repeat(np.arange(len(s0)), steps)
-    t = np.concatenate([[1.0]] + [np.arange(1, k + 1) / k for k in steps[1:]])
-    prev = np.maximum(owner_i - 1, 0)
-
-    def lerp(v):
-        return v[prev] + t * (v[owner_i] - v[prev])
-
-    cx, cy, z, s = lerp(cx0), lerp(cy0), lerp(z0), lerp(s0)
-    inner = (s > settings.end_zone_m) & (s < fit.length_m - settings.end_zone_m)
-    hw = 0.5 * fit.spec.width_m - settings.margin_m
-    out: dict[str, int] = {}
+    z, _ = evaluate_polys(fit.elevation, coarse.s.ravel())
     lines = np.asarray(obstacles.lines).reshape(-1, 9)
     line_names = obstacles.line_names or tuple(f"road {i}" for i in range(len(lines)))
-
-    def count(hit: np.ndarray) -> int:
-        return int(np.unique(owner_i[hit & inner]).size)
-
-    for row, name in zip(lines, line_names):
-        rx, ry = cx - row[0], cy - row[1]
-        along = rx * row[2] + ry * row[3]
-        lat = row[2] * ry - row[3] * rx
-        n = count((np.abs(z - row[8]) < settings.clearance_m) & (along > row[4])
-                  & (along < row[5]) & (lat > row[6] - hw) & (lat < row[7] + hw))
-        if n:
-            out[name] = out.get(name, 0) + n
+    single = [(name, Obstacles(lines=row[None])) for row, name in zip(lines, line_names)]
     if len(obstacles.points):
         owner = np.asarray(obstacles.owner)
-        pts = np.stack([cx, cy], axis=-1)
         for name in dict.fromkeys(obstacles.owner):
             k = owner == name
-            p, pz, phw = obstacles.points[k], obstacles.z[k], obstacles.half_width[k]
-            near = cKDTree(p).query_ball_point(pts, hw + float(phw.max()) + _kernels.STEP_M)
-            hit = np.zeros(len(pts), bool)
-            for i, js in enumerate(near):
-                if js and inner[i]:
-                    js = np.asarray(js)
-                    d2 = (cx[i] - p[js, 0]) ** 2 + (cy[i] - p[js, 1]) ** 2
-                    hit[i] = bool(((d2 < (hw + phw[js]) ** 2 + (_kernels.STEP_M / 2) ** 2)
-                                   & (np.abs(z[i] - pz[js]) < settings.clearance_m)).any())
-            n = count(hit)
-            if n:
-                out[name] = n
+            single.append((name, Obstacles(points=obstacles.points[k], z=obstacles.z[k],
+                                           half_width=obstacles.half_width[k],
+                                           owner=(name,) * int(k.sum()))))
+    out: dict[str, int] = {}
+    for name, one in single:
+        n = int(_conflicts(fit.spec, coarse.xy[None], coarse.tangent[None], coarse.s[None],
+                           z[None], np.array([fit.length_m]), one, settings)[0])
+        if n:
+            out[name] = out.get(name, 0) + n
     return out
