@@ -411,24 +411,24 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
 
 @pytest.mark.slow
 def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slope():
-    """A catalog cloverstack feature set (sample 7 of the workflow's t=2 array): the outer
-    connector oA1 still meets the loop lB1 at its level after Algorithm 1's resampling;
+    """A catalog cloverstack feature set (sample 76 of the workflow's t=2 array): the outer
+    connector oA1 still meets something at its level after Algorithm 1's resampling;
     the clearing draws (steepest slope of the domain) build it without a conflict."""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
     t = catalog_topologies()["cloverstack"]
-    lanes = {"A1": 5, "A2": 5, "B1": 5, "B2": 4}
-    targets = {"eA1": (math.inf, 4), "eA2": (280, 2), "fA1": (210, 5), "fA2": (150, 4),
-               "lB1": (100, 4), "lB2": (60, 4), "oA1": (40, 1), "oA2": (30, 4),
-               "oB1": (280, 5), "oB2": (40, 1)}
+    lanes = {"A1": 3, "A2": 4, "B1": 3, "B2": 4}
+    targets = {"eA1": (math.inf, 1), "eA2": (100, 5), "fA1": (30, 3), "fA2": (100, 4),
+               "lB1": (210, 4), "lB2": (150, 1), "oA1": (150, 1), "oA2": (40, 4),
+               "oB1": (30, 5), "oB2": (280, 2)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
-                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 2056955243)
+                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 3349305441)
     assert domain.clearing("oA1", 1).slope_pct == 5.0
     assert DomainResampler((30.0,), (0.0,), frozenset({"c"}), 1).clearing("c", 1) is None
 
     def build(resampler):
-        ic = build_interchange(t, lanes, feats, class_id="c0", sample=7, seed=2056955243,
+        ic = build_interchange(t, lanes, feats, class_id="c0", sample=76, seed=3349305441,
                                resampler=resampler)
         return {o.ramp: o for o in ic.outcomes}
 
