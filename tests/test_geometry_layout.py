@@ -358,14 +358,14 @@ def test_attachments_on_a_ramp_keep_the_order_pos_gives_them(seed):
 
 def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     """Rip-up and reroute: on these targets (a catalog feature set) the directional T's
-    left turn rL, fitted after rA2, still meets it; rA2 is fitted again around rL and
-    every ramp then meets its targets with no same-level conflict."""
+    right turn rR, fitted after the left turn rL, still meets it; rL is fitted again
+    around rR and every ramp then meets its targets with no same-level conflict."""
     from flyover.geometry import layout  # noqa: PLC0415
 
     t = catalog_topologies()["directional_t"]
-    lanes = {"A1": 4, "A2": 5, "B1": 5, "B2": 3}
-    feats = {"rA1": RampFeatures(150.0, 5.0), "rA2": RampFeatures(30.0, 1.0),
-             "rL": RampFeatures(40.0, 2.0), "rR": RampFeatures(210.0, 1.0)}
+    lanes = {"A1": 4, "A2": 5, "B1": 5, "B2": 4}
+    feats = {"rA1": RampFeatures(math.inf, 3.0), "rA2": RampFeatures(100.0, 4.0),
+             "rL": RampFeatures(60.0, 3.0), "rR": RampFeatures(280.0, 2.0)}
     calls = []
     real = layout._reroute
 
@@ -377,13 +377,13 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
 
     monkeypatch.setattr(layout, "_reroute", spy)
     ic = build_interchange(t, lanes, feats, seed=3967713561)
-    assert calls == [("rL", calls[0][1], ["rA2"])] and calls[0][1] > 0
+    assert calls == [("rR", calls[0][1], ["rL"])] and calls[0][1] > 0
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
-    # without it rL keeps its conflict with rA2, and says so
+    # without it rR keeps its conflict with rL, and says so
     monkeypatch.setattr(layout, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
     ic = build_interchange(t, lanes, feats, seed=3967713561)
-    r_l = next(o for o in ic.outcomes if o.ramp == "rL")
-    assert r_l.fit.conflicts > 0 and "with rA2" in r_l.infeasible
+    r_r = next(o for o in ic.outcomes if o.ramp == "rR")
+    assert r_r.fit.conflicts > 0 and "with rL" in r_r.infeasible
 
 
 def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_then_seeds(monkeypatch):

@@ -175,7 +175,7 @@ class RampSpec:
 class FitSettings:
     """Settings of the search and the tolerances (from config ``geometry``)."""
 
-    popsize: int = 8
+    popsize: int = 4
     maxiter: int = 150
     min_generations: int = 10
     tol_radius: float = 0.05
