@@ -440,3 +440,33 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
     o_a1 = out["oA1"]
     assert o_a1.fit.ok and o_a1.fit.spec.target_slope_pct == 5.0
     assert o_a1.resamples > plain["oA1"].resamples and not o_a1.infeasible
+
+
+def test_collector_distributor_roads_run_beside_their_carriageway():
+    """A cloverleaf's C-D roads leave their carriageway on a reverse curve at their target
+    radius, run straight beside it cd_offset_m from its edge, and rejoin it: no search,
+    no wandering across the quadrants."""
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(40.0 if r.startswith("c") else 150.0, 0.0 if r.startswith("c")
+                             else 3.0) for r in t.ramps}
+    st = LayoutSettings()
+    ic = build_interchange(t, {r: 4 for r in t.roads}, feats, seed=5, settings=st)
+    g = ic.geometry
+    for cd in ("cA1", "cA2", "cB1", "cB2"):
+        o = next(o for o in ic.outcomes if o.ramp == cd)
+        assert o.fit.ok and o.evaluations == 0 and o.first_try_ok
+        r = g.ramp(cd)
+        road = next(x for x in g.roads if x.id == r.start.parent)
+        assert r.end.parent == road.id
+        dense = sample_spline(o.fit.ctrl, 200)
+        d = np.array([math.cos(road.heading_rad), math.sin(road.heading_rad)])
+        rel = dense.xy.reshape(-1, 2) - np.array(road.start)
+        lateral = rel @ np.array([-d[1], d[0]])  # left of the road's reference line
+        along = rel @ d
+        middle = (along > along.min() + 200.0) & (along < along.max() - 200.0)
+        assert middle.sum() > 100
+        # beside the carriageway: its right edge (lanes x lane width right of the
+        # reference line) and then cd_offset_m more
+        assert np.allclose(lateral[middle], -4 * st.lane_width_m - st.cd_offset_m, atol=1e-6)
+        assert abs(r.min_radius_m - 40.0) < 0.05 * 40.0
+        assert r.length_m < (along.max() - along.min()) * 1.01

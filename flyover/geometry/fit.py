@@ -553,6 +553,28 @@ def measure(spec: RampSpec, x: np.ndarray, obstacles: Obstacles, settings: FitSe
     return recount(fit, obstacles, settings)
 
 
+def measure_spline(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float,
+                   obstacles: Obstacles, settings: FitSettings, seconds: float = 0.0) -> RampFit:
+    """A ramp built without the search (plan ``ctrl`` ``(n, 4, 2)`` attached at stations
+    ``start_s``/``end_s`` of its rails), measured as :func:`measure` measures a fit."""
+    ctrl = np.asarray(ctrl, float)
+    dense = sample_spline(ctrl, 400)
+    length = float(dense.length)
+    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
+    poses = []
+    for rail, s_m in ((spec.start, start_s), (spec.end, end_s)):
+        xy, h, z = rail.at(np.array([s_m]))
+        poses.append((float(xy[0, 0]), float(xy[0, 1]), float(h[0]), float(z[0])))
+    za, zb = poses[0][3], poses[1][3]
+    zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
+    g = spec.target_slope_pct / 100.0
+    polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
+    slope = max_grade(polys, length) * 100.0
+    fit = RampFit(spec, ctrl, float(start_s), float(end_s), poses[0], poses[1], polys, length,
+                  rmin, slope, 0, 0, seconds, zc)
+    return recount(fit, obstacles, settings)
+
+
 def recount(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> RampFit:
     """``fit`` with its same-level conflicts counted again against ``obstacles``
     (as :func:`measure` counts them: 64 samples per piece)."""

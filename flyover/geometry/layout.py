@@ -88,7 +88,8 @@ from flyover.errors import FlyoverError
 from flyover.geometry import _kernels
 from flyover.geometry.bezier import sample_spline
 from flyover.geometry.fit import (
-    FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, conflicts_with, fit_ramp, recount,
+    FitSettings, FreeEnd, Obstacles, Rail, RampFit, RampSpec, conflicts_with, fit_ramp,
+    measure_spline, recount,
 )
 from flyover.geometry.model import (
     Attachment, InterchangeGeometry, RampGeometry, RoadGeometry,
@@ -126,6 +127,8 @@ class LayoutSettings:
     terminal_m: float = 120.0
     road_margin_m: float = 100.0
     cd_clear_m: float = 350.0
+    #: a collector-distributor road runs this far (m) beside its carriageway's edge
+    cd_offset_m: float = 10.0
     stub_window_m: float = 200.0
     leads: bool = True
     lead_min_m: float = 60.0
@@ -801,6 +804,64 @@ def _stations(fit: RampFit, m: int, right_m: float = 0.0) -> dict[str, np.ndarra
     return {"s": dense.s[keep], "xy": xy[keep], "heading": head[keep], "z": z[keep]}
 
 
+def _arc(p: np.ndarray, heading: float, turn: float, radius: float) -> tuple[np.ndarray,
+                                                                         np.ndarray, float]:
+    """A circular arc from ``p`` at ``heading`` turning ``turn`` rad (left positive) at
+    ``radius`` as one cubic (tangents 4/3 tan(|turn| / 4) r long); its end and heading."""
+    k = 4.0 / 3.0 * radius * math.tan(abs(turn) / 4.0)
+    chord = 2.0 * radius * math.sin(abs(turn) / 2.0)
+    h1 = heading + turn
+    q = p + chord * np.array([math.cos(heading + turn / 2), math.sin(heading + turn / 2)])
+    ctrl = np.stack([p, p + k * np.array([math.cos(heading), math.sin(heading)]),
+                     q - k * np.array([math.cos(h1), math.sin(h1)]), q])
+    return ctrl, q, h1
+
+
+def _cd_fit(b: _Builder, ramp: str, spec: RampSpec) -> RampFit | None:
+    """A collector-distributor road built as real ones are: it leaves its carriageway on
+    a reverse curve, runs straight beside it ``cd_offset_m`` from its edge, and rejoins
+    it on a reverse curve (plan: two pairs of circular arcs at the target radius on the
+    lane centre, or ``inf_reference_m`` for an ``inf`` target, and a straight). It
+    reaches from the crossing's room (the rails' inner ends) far enough for the ramps
+    attached to it to turn at their radii. ``None`` when the rails leave no room for it."""
+    st = b.st
+    a, e = spec.start, spec.end
+    r_lane = spec.target_radius_m
+    if math.isinf(r_lane):
+        r_lane = st.fit.inf_reference_m
+    half = 0.5 * spec.width_m
+    d = st.cd_offset_m
+    theta = math.acos(max(-1.0, 1.0 - d / (2.0 * r_lane)))
+    s_curve = 2.0 * r_lane * math.sin(theta)  # along the carriageway
+    g = b.g
+    kids = [v for _, v, dd in g.out_edges(ramp, data=True) if dd["label"].is_out] + \
+        [u for u, _, dd in g.in_edges(ramp, data=True) if not dd["label"].is_out]
+    r_kids = max([min(b.features[k].radius_m, st.fit.inf_reference_m) for k in kids
+                  if k in b.features] or [0.0])
+    room = s_curve + 2.0 * (r_kids + st.gap_m)
+    sa = float(np.clip(a.hi - room, a.lo, a.hi))
+    sb = float(np.clip(e.lo + room, e.lo, e.hi))
+    (pa, ha, _), (pb, hb, _) = a.at(np.array([sa])), e.at(np.array([sb]))
+    pa, pb, h = pa[0], pb[0], float(ha[0])
+    along = float(np.dot(pb - pa, [math.cos(h), math.sin(h)]))
+    straight = along - 2.0 * s_curve
+    if straight < 1.0 or abs(_wrap(float(hb[0]) - h)) > 1e-6:
+        return None
+    pieces = []
+    p, head = np.asarray(pa, float), h
+    # right arcs have the lane centre inside (its radius r - half), left arcs outside
+    for turn in (-theta, theta):
+        c, p, head = _arc(p, head, turn, r_lane + (half if turn < 0 else -half))
+        pieces.append(c)
+    q = p + straight * np.array([math.cos(head), math.sin(head)])
+    pieces.append(np.stack([p + (q - p) * f for f in (0.0, 1 / 3, 2 / 3, 1.0)]))
+    p = q
+    for turn in (theta, -theta):
+        c, p, head = _arc(p, head, turn, r_lane + (half if turn < 0 else -half))
+        pieces.append(c)
+    return measure_spline(spec, np.stack(pieces), sa, sb, b.obstacles(), st.fit)
+
+
 def _fit_with_levels(b: _Builder, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
     """Fit; while the ramp meets something at its level, lift its crest one level.
 
@@ -877,7 +938,12 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             raise GeometryError("no features for ramp", source=topology.source, element=ramp)
         feat = features[ramp]
         rseed = (seed * 1_000_003 + k * 7919) % (2**32)
-        fit, evals, secs = _fit_with_levels(b, b.spec(ramp, feat), rseed)
+        spec = b.spec(ramp, feat)
+        built = _cd_fit(b, ramp, spec) if b._same_road(ramp) else None
+        if built is not None and built.ok:
+            fit, evals, secs = built, 0, 0.0
+        else:
+            fit, evals, secs = _fit_with_levels(b, spec, rseed)
         if fit.conflicts:  # make way: refit the ramps it meets, then it again
             fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
             evals, secs = evals + e2, secs + s2
