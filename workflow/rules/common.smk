@@ -116,7 +116,8 @@ def export_outputs(wildcards):
 # -- geometry stage (workflow/rules/geometry.smk) --------------------------------
 # 3: straight leads on climbing ramps (geometry.leads)
 # 4: compiled DE generation step (other random trajectories), restarts 5
-GEOMETRY_VERSION = 9
+# 10: exact stretch tests in the conflict kernel, popsize 4, built C-D roads
+GEOMETRY_VERSION = 10
 
 
 def _features_buildable(class_id):
