@@ -397,3 +397,50 @@ def test_ramp_point_test_is_exact_along_the_whole_stretch():
             # the depth is taken at the closest approach or the middle: at most the walk's
             assert 0.0 < deep[0] - first <= walk + 0.01 or walk == 0.0
     assert hits > 20
+
+
+def test_trials_worse_than_their_parents_skip_only_what_cannot_matter():
+    """The bound on a trial's energy: candidates whose energy is within their bound get
+    exactly the terms they get without one; the others (their energy without conflicts
+    already above it) come back with infinite energy, and their true energy is above it
+    too, so a DE trial loses to its parent either way."""
+    from flyover.geometry.fit import bounds, ramp_objective
+
+    a = Rail.line("A1", "Out-R", (0, -2), 0.0, 0.0, -7.5, -900, -60)
+    b = Rail.line("B1", "In-R", (2, 0), np.pi / 2, 6.5, -7.5, 60, 900)
+    road = np.array([[-2.0, 0.0, 0.0, -1.0, -1e5, 1e5, -7.5, 0.0, 6.5]])
+    spec = RampSpec("fly", a, b, None, np.pi / 2, 2, W, 150.0, 3.0, z_crest=13.0)
+    lo, hi = np.array(bounds(spec)).T
+    x = lo[:, None] + (hi - lo)[:, None] * np.random.default_rng(6).random((len(lo), 200))
+    f, _ = ramp_objective(spec, Obstacles(road), FitSettings())
+    full = f.table(x)
+    e = f.energy(full)
+    assert (full[7] > 0).sum() > 20  # many candidates do meet the road
+    bound = np.quantile(e, 0.4) * np.ones(x.shape[1])
+    cut = f.table(x, bound)
+    e_cut = f.energy(cut)
+    within = e <= bound
+    assert within.sum() > 50 and (~within).sum() > 50
+    assert np.array_equal(cut[:, within], full[:, within])
+    skipped = np.isinf(e_cut)
+    assert np.all(e[skipped] > bound[skipped]) and skipped.sum() > 0
+    assert not f.acceptable(cut)[skipped].any()
+    assert np.array_equal(e_cut[~skipped], e[~skipped])
+
+
+def test_evolve_with_bounded_trials_takes_the_same_path():
+    """Giving a DE trial that cannot beat its parent an infinite energy (what the bounded
+    objective does) changes nothing: same best vector, energy and effort."""
+    from flyover.geometry.fit import evolve
+
+    def sphere(x):
+        return ((x - 0.3) ** 2).sum(0) + 0.1 * np.abs(np.sin(7 * x)).sum(0)
+
+    def bounded(x, bound=None):
+        e = sphere(x)
+        return e if bound is None else np.where(e > bound, np.inf, e)
+
+    bounded.bounded = True
+    a = evolve(sphere, [(-1.0, 1.0)] * 4, 4, 80, seed=5)
+    b = evolve(bounded, [(-1.0, 1.0)] * 4, 4, 80, seed=5)
+    assert np.array_equal(a.x, b.x) and a.fun == b.fun and a.evaluations == b.evaluations
