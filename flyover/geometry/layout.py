@@ -130,6 +130,7 @@ class LayoutSettings:
     #: a collector-distributor road runs this far (m) beside its carriageway's edge
     cd_offset_m: float = 10.0
     stub_window_m: float = 200.0
+    turn_room: float = 2.0
     leads: bool = True
     lead_min_m: float = 60.0
     max_resamples: int = 3
@@ -383,7 +384,9 @@ class _Builder:
     def _kids_room(self, kids: list[str], z: float, turning: bool = True) -> float:
         """Room a ramp leaves toward the crossing for the ramps leaving or joining it
         (``kids``, at height ``z``): for the planned ones to climb to their crest, and
-        (``turning``) for the turning ones to turn at their radius."""
+        (``turning``) for the turning ones to turn at their radius (``turn_room`` times
+        it: the turn, and its straight leads and transitions; ``inf_reference_m`` for an
+        ``inf`` target)."""
         extra = 0.0
         for k in kids:
             if k not in self.features:
@@ -393,7 +396,9 @@ class _Builder:
                 extra = max(extra, abs(self.plan[k] - z) / gk + self.st.fit.transition_m)
             mov = self._movement(k)
             if turning and mov is not None and abs(mov) > 1.0:
-                extra = max(extra, min(self.features[k].radius_m, self.st.fit.inf_reference_m))
+                r = self.features[k].radius_m
+                extra = max(extra, self.st.turn_room * r if math.isfinite(r)
+                            else self.st.fit.inf_reference_m)
         return extra
 
     def _lanes(self, ramp: str) -> int:
