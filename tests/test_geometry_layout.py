@@ -411,35 +411,38 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
 
 @pytest.mark.slow
 def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slope():
-    """A catalog cloverstack feature set (sample 76 of the workflow's t=2 array): the outer
-    connector oA1 still meets something at its level after Algorithm 1's resampling;
-    the clearing draws (steepest slope of the domain) build it without a conflict."""
+    """A catalog stack4 feature set (sample 11 of the workflow's t=2 array): the upper left
+    turn lB2 still meets something at its level after Algorithm 1's resampling; the
+    clearing draws (steepest slope of the domain) build it without a conflict."""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
-    t = catalog_topologies()["cloverstack"]
-    lanes = {"A1": 3, "A2": 4, "B1": 3, "B2": 4}
-    targets = {"eA1": (math.inf, 1), "eA2": (100, 5), "fA1": (30, 3), "fA2": (100, 4),
-               "lB1": (210, 4), "lB2": (150, 1), "oA1": (150, 1), "oA2": (40, 4),
-               "oB1": (30, 5), "oB2": (280, 2)}
+    t = catalog_topologies()["stack4"]
+    lanes = {"A1": 3, "A2": 5, "B1": 3, "B2": 3}
+    targets = {"eA1": (150, 1), "eA2": (210, 5), "eB1": (280, 1), "eB2": (210, 5),
+               "lA1": (30, 4), "lA2": (40, 2), "lB1": (60, 1), "lB2": (100, 4),
+               "mA1": (280, 2), "mA2": (100, 1), "mB1": (30, 3), "mB2": (60, 2),
+               "rA1": (210, 3), "rA2": (150, 5), "rB1": (math.inf, 4), "rB2": (280, 2)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
-                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 3349305441)
-    assert domain.clearing("oA1", 1).slope_pct == 5.0
+                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 3583920652)
+    assert domain.clearing("lB2", 1).slope_pct == 5.0
     assert DomainResampler((30.0,), (0.0,), frozenset({"c"}), 1).clearing("c", 1) is None
 
     def build(resampler):
-        ic = build_interchange(t, lanes, feats, class_id="c0", sample=76, seed=3349305441,
+        ic = build_interchange(t, lanes, feats, class_id="c0", sample=11, seed=3583920652,
                                resampler=resampler)
         return {o.ramp: o for o in ic.outcomes}
 
     plain = build(lambda ramp, attempt: domain(ramp, attempt))  # no clearing draws
-    assert plain["oA1"].fit.conflicts > 0 and "same-level conflict" in plain["oA1"].infeasible
-    assert plain["oA1"].resamples == 3
+    assert plain["lB2"].fit.conflicts > 0 and "same-level conflict" in plain["lB2"].infeasible
+    assert plain["lB2"].resamples == 3
     out = build(domain)
     assert all(o.fit.conflicts == 0 for o in out.values())
-    o_a1 = out["oA1"]
-    assert o_a1.fit.ok and o_a1.fit.spec.target_slope_pct == 5.0
-    assert o_a1.resamples > plain["oA1"].resamples and not o_a1.infeasible
+    l_b2 = out["lB2"]
+    # clear of everything at the steepest slope (its radius drawn from the domain may
+    # still be missed: then that, not a crossing, is what it records)
+    assert l_b2.fit.conflicts == 0 and l_b2.fit.spec.target_slope_pct == 5.0
+    assert l_b2.resamples > plain["lB2"].resamples and "same-level" not in l_b2.infeasible
 
 
 def test_collector_distributor_roads_run_beside_their_carriageway():
