@@ -329,6 +329,29 @@ def _lane(xs, ys, tx, ty, sp, ss, length, width, za, zc, zb, grade, transition, 
                     + sf * (hf - _climb(length - ss[j], hf, grade, transition)))
 
 
+@njit(cache=True)
+def _scratch(m, n):  # pragma: no cover - compiled
+    """Per-candidate work arrays for ``n`` samples, ``m`` per piece: the parameters
+    ``t``, then what :func:`_shape` fills (``xs, ys, tx, ty, sp, kap``, stations ``ss``
+    as row 0) and what :func:`_lane_conflicts` fills (``cx, cy, zz`` row 0, ``ln``)."""
+    return (np.linspace(0.0, 1.0, m), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n), np.empty((1, n)), np.empty((1, n)), np.empty((1, n)),
+            np.empty((1, n)), np.empty(1))
+
+
+@njit(cache=True, nogil=True)
+def _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za, zc, zb, grade, transition,
+                    cx, cy, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
+                    x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover - compiled
+    """One candidate's conflicting samples and their depth (:func:`conflicts`) on its
+    lane centre (:func:`_lane`; ``ss`` its stations as row 0)."""
+    _lane(xs, ys, tx, ty, sp, ss[0], length, width, za, zc, zb, grade, transition, cx, cy, zz)
+    ln[0] = length
+    c, d = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw,
+                     starts, x0, y0, cell, nx, ny, zlo, zhi)
+    return c[0], d[0]
+
+
 @njit(cache=True, nogil=True)
 def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, clearance,
                  lines, px, py, pz, phw, starts, x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover
@@ -341,28 +364,19 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
     of conflicting samples and their depth (:func:`conflicts`; heights from the grade line of
     :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``).
     """
-    p_count, n = ctrl.shape[0], ctrl.shape[1] * m
+    p_count = ctrl.shape[0]
     out = np.zeros((6, p_count))
     conf = np.zeros(p_count, np.int64)
     deep = np.zeros(p_count)
-    t = np.linspace(0.0, 1.0, m)
-    xs, ys, tx, ty, sp, kap = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                               np.empty(n), np.empty(n))
-    ss = np.empty((1, n))
-    cx = np.empty((1, n))
-    cy = np.empty((1, n))
-    zz = np.empty((1, n))
-    ln = np.empty(1)
+    t, xs, ys, tx, ty, sp, kap, ss, cx, cy, zz, ln = _scratch(m, ctrl.shape[1] * m)
     for p in range(p_count):
         r = _shape(ctrl[p], m, width, t, xs, ys, tx, ty, sp, ss[0], kap)
         for k in range(6):
             out[k, p] = r[k]
-        _lane(xs, ys, tx, ty, sp, ss[0], r[0], width, za[p], zc[p], zb[p], grade, transition,
-              cx, cy, zz)
-        ln[0] = r[0]
-        c, d = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw,
-                         starts, x0, y0, cell, nx, ny, zlo, zhi)
-        conf[p], deep[p] = c[0], d[0]
+        conf[p], deep[p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, r[0], width, za[p], zc[p],
+                                           zb[p], grade, transition, cx, cy, zz, ln, end_zone,
+                                           hw, clearance, lines, px, py, pz, phw, starts, x0,
+                                           y0, cell, nx, ny, zlo, zhi)
     return out[0], out[1], out[2], out[3], out[4], out[5], conf, deep
 
 
@@ -536,15 +550,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     zb = poses[1, 3].copy()
     zc = np.maximum(np.maximum(za, zb), z_crest)
     g = grade if grade > 0 else 1.0
-    n = ctrl.shape[1] * m
-    t = np.linspace(0.0, 1.0, m)
-    xs, ys, tx, ty, sp, kap = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                               np.empty(n), np.empty(n))
-    ss = np.empty((1, n))
-    cx = np.empty((1, n))
-    cy = np.empty((1, n))
-    zz = np.empty((1, n))
-    ln = np.empty(1)
+    t, xs, ys, tx, ty, sp, kap, ss, cx, cy, zz, ln = _scratch(m, ctrl.shape[1] * m)
     out = np.empty((9, p_count))
     inf_target = np.isinf(r_target)
     r_eff = min(r_target, inf_ref)
@@ -579,13 +585,10 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
         if _energy1(out, p, weights[0], weights[1], weights[2]) > bound[p]:
             out[7, p] = np.inf
             continue
-        _lane(xs, ys, tx, ty, sp, ss[0], length, width, za[p], zc[p], zb[p], g, transition,
-              cx, cy, zz)
-        ln[0] = length
-        conf, depth = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz,
-                                phw, starts, x0, y0, cell, nx, ny, zlo, zhi)
-        out[7, p] = conf[0]
-        out[8, p] = depth[0]
+        out[7, p], out[8, p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za[p],
+                                               zc[p], zb[p], g, transition, cx, cy, zz, ln,
+                                               end_zone, hw, clearance, lines, px, py, pz, phw,
+                                               starts, x0, y0, cell, nx, ny, zlo, zhi)
     return out
 
 

@@ -538,40 +538,38 @@ def measure(spec: RampSpec, x: np.ndarray, obstacles: Obstacles, settings: FitSe
             evaluations: int = 0, seconds: float = 0.0) -> RampFit:
     """Build the final ramp from decision vector ``x`` and measure it densely."""
     dec = _decode(spec, np.asarray(x, float)[:, None])
-    ctrl = dec.ctrl[0]
-    dense = sample_spline(ctrl, 400)
-    length = float(dense.length)
-    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
-    za, zb = float(dec.a[3][0]), float(dec.b[3][0])
-    zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
-    g = spec.target_slope_pct / 100.0
-    polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
-    slope = max_grade(polys, length) * 100.0
     pose = lambda e: tuple(float(v[0]) for v in e)  # noqa: E731
-    fit = RampFit(spec, ctrl, float(dec.sa[0]), float(dec.sb[0]), pose(dec.a), pose(dec.b),
-                  polys, length, rmin, slope, 0, evaluations, seconds, zc)
-    return recount(fit, obstacles, settings)
+    return _measured(spec, dec.ctrl[0], float(dec.sa[0]), float(dec.sb[0]), pose(dec.a),
+                     pose(dec.b), obstacles, settings, evaluations, seconds)
 
 
 def measure_spline(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float,
                    obstacles: Obstacles, settings: FitSettings, seconds: float = 0.0) -> RampFit:
     """A ramp built without the search (plan ``ctrl`` ``(n, 4, 2)`` attached at stations
     ``start_s``/``end_s`` of its rails), measured as :func:`measure` measures a fit."""
-    ctrl = np.asarray(ctrl, float)
-    dense = sample_spline(ctrl, 400)
-    length = float(dense.length)
-    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
     poses = []
     for rail, s_m in ((spec.start, start_s), (spec.end, end_s)):
         xy, h, z = rail.at(np.array([s_m]))
         poses.append((float(xy[0, 0]), float(xy[0, 1]), float(h[0]), float(z[0])))
-    za, zb = poses[0][3], poses[1][3]
+    return _measured(spec, np.asarray(ctrl, float), float(start_s), float(end_s), poses[0],
+                     poses[1], obstacles, settings, 0, seconds)
+
+
+def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, pose_a: tuple,
+              pose_b: tuple, obstacles: Obstacles, settings: FitSettings, evaluations: int,
+              seconds: float) -> RampFit:
+    """The fit of plan ``ctrl`` between end poses ``(x, y, heading, z)``, measured densely:
+    length, lane-centre minimum radius, grade line and its maximum slope, conflicts."""
+    dense = sample_spline(ctrl, 400)
+    length = float(dense.length)
+    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
+    za, zb = pose_a[3], pose_b[3]
     zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
     g = spec.target_slope_pct / 100.0
     polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
     slope = max_grade(polys, length) * 100.0
-    fit = RampFit(spec, ctrl, float(start_s), float(end_s), poses[0], poses[1], polys, length,
-                  rmin, slope, 0, 0, seconds, zc)
+    fit = RampFit(spec, ctrl, start_s, end_s, pose_a, pose_b, polys, length, rmin, slope, 0,
+                  evaluations, seconds, zc)
     return recount(fit, obstacles, settings)
 
 

@@ -357,6 +357,8 @@ class _Builder:
         return plan
 
     def _stub_kids(self, ramp: str) -> list[str]:
+        """The ramps leaving ``ramp`` or joining it (a stub's children, a C-D road's
+        exits and entrances)."""
         g = self.g
         return [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out] + \
             [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
@@ -838,11 +840,8 @@ def _cd_fit(b: _Builder, ramp: str, spec: RampSpec) -> RampFit | None:
     d = st.cd_offset_m
     theta = math.acos(max(-1.0, 1.0 - d / (2.0 * r_lane)))
     s_curve = 2.0 * r_lane * math.sin(theta)  # along the carriageway
-    g = b.g
-    kids = [v for _, v, dd in g.out_edges(ramp, data=True) if dd["label"].is_out] + \
-        [u for u, _, dd in g.in_edges(ramp, data=True) if not dd["label"].is_out]
-    r_kids = max([min(b.features[k].radius_m, st.fit.inf_reference_m) for k in kids
-                  if k in b.features] or [0.0])
+    r_kids = max([min(b.features[k].radius_m, st.fit.inf_reference_m)
+                  for k in b._stub_kids(ramp) if k in b.features] or [0.0])
     room = s_curve + 2.0 * (r_kids + st.gap_m)
     sa = float(np.clip(a.hi - room, a.lo, a.hi))
     sb = float(np.clip(e.lo + room, e.lo, e.hi))
