@@ -7,6 +7,7 @@ import pytest
 
 from flyover.geometry.bezier import sample_spline
 from flyover.geometry.layout import GeometryError, LayoutSettings, RampFeatures, build_interchange
+from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.profile import evaluate_polys
 from flyover.topology.catalog import catalog_topologies
@@ -381,7 +382,7 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     # without it rR keeps its conflict with rL, and says so
     monkeypatch.setattr(layout, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
-    ic = build_interchange(t, lanes, feats, seed=3967713561)
+    ic = build_interchange(t, lanes, feats, seed=3967713561, settings=LayoutSettings(rebuilds=0))
     r_r = next(o for o in ic.outcomes if o.ramp == "rR")
     assert r_r.fit.conflicts > 0 and "with rL" in r_r.infeasible
 
@@ -430,7 +431,7 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
 
     def build(resampler):
         ic = build_interchange(t, lanes, feats, class_id="c0", sample=11, seed=3583920652,
-                               resampler=resampler)
+                               resampler=resampler, settings=LayoutSettings(rebuilds=0))
         return {o.ramp: o for o in ic.outcomes}
 
     plain = build(lambda ramp, attempt: domain(ramp, attempt))  # no clearing draws
@@ -443,6 +444,42 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
     # still be missed: then that, not a crossing, is what it records)
     assert l_b2.fit.conflicts == 0 and l_b2.fit.spec.target_slope_pct == 5.0
     assert l_b2.resamples > plain["lB2"].resamples and "same-level" not in l_b2.infeasible
+
+
+@pytest.mark.slow
+def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds():
+    """A catalog turbine feature set (sample 57 of the workflow's t=2 array): in the first
+    build lB2 still overlaps roads B1/B2 after resampling; a rebuild with other seeds
+    clears it, and the result says so (its seed, first-try failure and all the effort)."""
+    from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
+
+    t = catalog_topologies()["turbine"]
+    lanes = {"A1": 3, "A2": 3, "B1": 4, "B2": 4}
+    targets = {"eA1": (280, 1), "eA2": (40, 2), "eB1": (210, 4), "eB2": (60, 1),
+               "lA1": (30, 4), "lA2": (math.inf, 2), "lB1": (100, 2), "lB2": (150, 2),
+               "rA1": (30, 3), "rA2": (280, 4), "rB1": (60, 2), "rB2": (60, 2)}
+    feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
+    seed = 2126496264
+    domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
+                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), seed)
+
+    def build(rebuilds):
+        return build_interchange(t, lanes, feats, class_id="c0", sample=57, seed=seed,
+                                 resampler=domain, settings=LayoutSettings(rebuilds=rebuilds))
+
+    once = build(0)
+    met = {o.ramp: o for o in once.outcomes if o.fit.conflicts}
+    assert list(met) == ["lB2"] and "same-level conflict" in met["lB2"].infeasible
+    assert once.geometry.seed == seed
+    again = build(3)
+    assert all(o.fit.conflicts == 0 for o in again.outcomes)
+    assert not same_level_conflicts(again.geometry)
+    assert again.geometry.seed != seed  # the build kept is reproducible from its seed
+    by = {o.ramp: o for o in again.outcomes}
+    for o in once.outcomes:  # first try is the first build's; the effort includes it
+        assert by[o.ramp].first_try_ok == o.first_try_ok
+        assert by[o.ramp].evaluations > o.evaluations or o.evaluations == 0
+    assert build(3).geometry.to_json() == again.geometry.to_json()  # same seed, same result
 
 
 def test_collector_distributor_roads_run_beside_their_carriageway():

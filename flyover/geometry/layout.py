@@ -70,9 +70,12 @@ avoiding same-level conflicts with roads and the ramps already fitted:
    curve as an obstacle and kept only if it meets them without conflict;
    then the new ramp is counted again and, if it still conflicts, refitted;
 4. a ramp that misses its targets after all that is resampled (Algorithm 1)
-   through ``resampler``; what still misses is recorded with the reason.
+   through ``resampler``; what still misses is recorded with the reason;
+5. an interchange in which a ramp still meets something at its level is
+   built again from scratch with other seeds (``rebuilds`` times at most),
+   and the build with the fewest conflicting ramps is kept.
 
-All of this is "the first try" as long as the targets are the sampled ones.
+Steps 1–3 of the first build are "the first try" as long as the targets are the sampled ones.
 """
 
 from __future__ import annotations
@@ -135,6 +138,8 @@ class LayoutSettings:
     lead_min_m: float = 60.0
     max_resamples: int = 3
     restarts: int = 5
+    #: whole-interchange rebuilds with other DE seeds while a ramp still meets something
+    rebuilds: int = 3
     inf_min_radius_m: float = 30.0
     fit: FitSettings = field(default_factory=FitSettings)
 
@@ -929,12 +934,47 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         something at its level after that is resampled with its draws (the
         steepest slope), up to ``max_resamples`` times more.
 
+    While a ramp still meets something at its level, the interchange is built
+    again with seeds derived from ``seed`` (``settings.rebuilds`` times at most);
+    the build with the fewest conflicting ramps is returned, with first-try
+    success from the first build and the effort of all builds.
+
     Raises
     ------
     GeometryError
         When the topology cannot be laid out (naming the element).
     """
     st = settings or LayoutSettings()
+    best = None
+    effort: dict[str, tuple[int, float]] = {}
+    first: dict[str, bool] = {}
+    for k in range(st.rebuilds + 1):
+        # a ramp meeting something at its level is never kept if it can be helped: the
+        # whole interchange is built again with other seeds (every ramp's shape, hence
+        # where the later ones find room, changes); the build with the fewest conflicts
+        # wins, its effort includes the discarded builds'
+        ks = seed if k == 0 else (seed * 2_654_435_761 + 97 * k) % (2**32)
+        ic = _build_once(topology, lanes, features, class_id, sample, ks, st, resampler)
+        for o in ic.outcomes:
+            e, t = effort.get(o.ramp, (0, 0.0))
+            effort[o.ramp] = (e + o.evaluations, t + o.seconds)
+            first.setdefault(o.ramp, o.first_try_ok)
+        rank = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
+                sum(o.fit.conflicts for o in ic.outcomes), sum(not o.fit.ok for o in ic.outcomes))
+        if best is None or rank < best[0]:
+            best = (rank, ic)
+        if rank[0] == 0:
+            break
+    ic = best[1]
+    outs = tuple(replace(o, first_try_ok=first[o.ramp], evaluations=effort[o.ramp][0],
+                         seconds=effort[o.ramp][1]) for o in ic.outcomes)
+    return Interchange(ic.geometry, outs)
+
+
+def _build_once(topology: Topology, lanes: Mapping[str, int],
+                features: Mapping[str, RampFeatures], class_id: str, sample: int, seed: int,
+                st: LayoutSettings, resampler) -> Interchange:
+    """One build of :func:`build_interchange` with one seed."""
     b = _Builder(topology, lanes, features, st, seed)
     outcomes = []
     for k, ramp in enumerate(b.order()):
