@@ -165,6 +165,13 @@ def main() -> None:
               f"max {max(secs):.2f}  (n={len(secs)})")
     print(f"per ramp incl. restarts/lifts/resamples, vectorised DE (wall s): median {np.median(ramp_s):.3f}  p95 "
           f"{np.percentile(ramp_s, 95):.3f}  (n={len(ramp_s)})")
+    lengths: dict[str, list[float]] = {}
+    for r in rows:
+        lengths.setdefault(names[r["class_id"]], []).append(r["length_m"])
+    print("ramp length (m):")
+    for name, ls in sorted(lengths.items()):
+        print(f"  {name:<17} median {np.median(ls):6.0f}  p95 {np.percentile(ls, 95):6.0f}  "
+              f"max {max(ls):6.0f}  (n={len(ls)})")
     rng = np.random.default_rng(0)
     pick = rng.choice(len(fits), size=min(args.plain_ramps, len(fits)), replace=False)
     engines = {"flyover DE (JADE, compiled objective)": settings.fit,
