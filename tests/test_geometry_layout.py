@@ -482,6 +482,38 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
     assert build(3).geometry.to_json() == again.geometry.to_json()  # same seed, same result
 
 
+@pytest.mark.slow
+def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_room(monkeypatch):
+    """J1's r2 joins r3 on r3's left; r3 joins R4 from R4's right and runs along its edge,
+    so along that stretch r3's left is R4. A catalog feature set (sample 18) in which r2
+    used to squeeze in there: r2 now joins r3 where r2's lane is clear of R4, first try."""
+    from flyover.geometry import layout  # noqa: PLC0415
+
+    t = catalog_topologies()["j1"]
+    feats = {"r1": RampFeatures(210.0, 3.0), "r2": RampFeatures(math.inf, 1.0),
+             "r3": RampFeatures(40.0, 4.0), "r4": RampFeatures(100.0, 2.0)}
+    st = LayoutSettings(rebuilds=0)
+    ic = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072466, settings=st)
+    by = {o.ramp: o for o in ic.outcomes}
+    assert all(o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
+    assert not same_level_conflicts(ic.geometry)
+    # where r2 joins, r3's left side has room for r2's lane beside R4's band
+    r3, r4 = by["r3"].fit, next(r for r in ic.geometry.roads if r.id == "R4")
+    stn = layout._stations(r3, 400)
+    k = int(np.searchsorted(stn["s"], by["r2"].fit.end_s))
+    h = stn["heading"][k]
+    left = np.array([-math.sin(h), math.cos(h)])
+    d = np.array([math.cos(r4.heading_rad), math.sin(r4.heading_rad)])
+    for w in np.linspace(0.5, by["r2"].fit.spec.width_m, 5):
+        lat = (stn["xy"][k] + w * left - np.array(r4.start)) @ np.array([-d[1], d[0]])
+        assert not (-r4.lanes * st.lane_width_m <= lat <= 0.0)
+    # without the room rule, the same build squeezes r2 in beside R4
+    monkeypatch.setattr(layout._Builder, "_room_beside",
+                        lambda self, parent, off, width, lo, hi: (lo, hi))
+    squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072466, settings=st)
+    assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
+
+
 def test_collector_distributor_roads_run_beside_their_carriageway():
     """A cloverleaf's C-D roads leave their carriageway on a reverse curve at their target
     radius, run straight beside it cd_offset_m from its edge, and rejoin it: no search,

@@ -24,7 +24,10 @@ Layout
   of the loop. A ramp joining a road after a loop leaves it, and not coming
   from the road the loop goes to (it cannot go round the loop: a trumpet),
   passes over the loop's exit branch and keeps room after it to descend. A
-  ramp leaving (joining) a loop does so before (after) the loop turns.
+  ramp leaving (joining) a loop does so before (after) the loop turns. A ramp
+  attached on the side of a parent that faces a road (J1's r2 joins r3 on the
+  left where r3 runs along R4's edge) attaches only where its lane is clear
+  of that road.
 * The movement of a ramp is that of the roads its chain connects. A loop is
   a left movement that leaves its parent on the right (``Out-R``), unless its
   exit ``pos`` is below 0.4 (then it is a semi-directional flyover); it turns
@@ -594,9 +597,46 @@ class _Builder:
                 lo, hi = 0.15 * length, 0.6 * length
             else:
                 lo, hi = 0.4 * length, 0.85 * length
+            lo, hi = self._room_beside(parent, off, width, lo, hi)
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
+
+    def _room_beside(self, parent: str, off: float, width: float, lo: float,
+                     hi: float) -> tuple[float, float]:
+        """The part of ``lo..hi`` on a fitted parent where a child ``width`` wide, beside it
+        at ``off``, is clear of the roads at its level.
+
+        A ramp that joins a road runs along its edge for a while (and one that leaves a
+        road starts along it): a child on the side facing that road has no room there,
+        whatever its shape (J1's r2 joins r3 on the left, between r3 and R4). When some
+        stations of ``lo..hi`` lack that room, the window becomes the run of stations
+        with room (within 5..95 % of the parent) that overlaps it most, else the longest;
+        unchanged when every station has room or none has."""
+        st = self.rails[parent]
+        s, xy, head, z = st["s"], st["xy"], st["heading"], st["z"]
+        left = np.stack([-np.sin(head), np.cos(head)], -1)
+        clear = np.ones(len(s), bool)
+        for k in np.linspace(off - width + 0.5, off + 1.0, 5):  # across the child's lane
+            q = xy + k * left
+            for r in self.roads.values():
+                d = np.array([math.cos(r.heading), math.sin(r.heading)])
+                rel = q - np.asarray(r.origin)
+                along, lat = rel @ d, rel @ np.array([-d[1], d[0]])
+                clear &= ~((along >= r.t_lo) & (along <= r.t_hi)
+                           & (lat >= -r.lanes * self.st.lane_width_m) & (lat <= 0.0)
+                           & (np.abs(z - r.z) < self.st.fit.clearance_m))
+        inside = (s >= lo) & (s <= hi)
+        if clear[inside].all() or not clear.any():
+            return lo, hi
+        length = s[-1]
+        ok = clear & (s >= 0.05 * length) & (s <= 0.95 * length)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+        runs = [(s[a], s[b - 1]) for a, b in zip(edges[::2], edges[1::2]) if b - 1 > a]
+        if not runs:
+            return lo, hi
+        a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
+        return float(a), float(b)
 
     def _goal_z(self, ramp: str, forward: bool) -> float:
         g = self.g
