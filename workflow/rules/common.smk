@@ -117,7 +117,8 @@ def export_outputs(wildcards):
 # 3: straight leads on climbing ramps (geometry.leads)
 # 4: compiled DE generation step (other random trajectories), restarts 5
 # 10: exact stretch tests in the conflict kernel, popsize 4, built C-D roads
-# 11: an interchange with a ramp still in conflict is rebuilt with other seeds (rebuilds)
+# 11: an interchange with a ramp still in conflict is rebuilt with other seeds (rebuilds);
+#     a child on the side of its parent facing a road attaches where it has room
 GEOMETRY_VERSION = 11
 
 
