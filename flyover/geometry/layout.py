@@ -21,7 +21,9 @@ Layout
   whole length a stub runs along the road or a loop reaches along it). A
   cloverleaf's outer connector, which goes round the loop joining the same
   two roads, attaches where an arc of its target radius clears every point
-  of the loop. A ramp joining a road after a loop leaves it, and not coming
+  of the loop, and is fitted with the loop as an obstacle at every height: it
+  goes round the loop, not over or under it (if it cannot meet its targets
+  that way, it is fitted as any other ramp). A ramp joining a road after a loop leaves it, and not coming
   from the road the loop goes to (it cannot go round the loop: a trumpet),
   passes over the loop's exit branch and keeps room after it to descend. A
   ramp leaving (joining) a loop does so before (after) the loop turns. A ramp
@@ -331,6 +333,8 @@ class _Builder:
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.plan = self._level_plan()
+        #: fitted loops that the ramp being fitted must not cross in plan, at any height
+        self.keep_out: frozenset[str] = frozenset()
 
     def _level_plan(self) -> dict[str, float]:
         """Crest heights fixed up front: the direct left turns.
@@ -517,6 +521,19 @@ class _Builder:
         roads the other way round: a cloverleaf's outer connector round its loop."""
         return self._is_loop(other) and not self._is_loop(ramp) and \
             self._other_road(ramp, road) == self._other_road(other, road)
+
+    def round_loops(self, ramp: str) -> frozenset[str]:
+        """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
+        joining the same two roads the other way round, on the road they share)."""
+        out = set()
+        for end in _ends(self.topo, ramp):
+            if end is None or end[0] not in self.roads:
+                continue
+            for other in self.fits:
+                if any(e is not None and e[0] == end[0] for e in _ends(self.topo, other)) \
+                        and self._goes_round_loop(ramp, other, end[0]):
+                    out.add(other)
+        return frozenset(out)
 
     def _round_loop(self, loop: str, road: str, width: float, side: int) -> float:
         """Where along ``road`` a ramp turning at its target radius must attach to go round
@@ -777,6 +794,18 @@ class _Builder:
             zs.append(s["centre_z"])
             hw.append(np.full(len(s["centre_z"]), self.width[rid] / 2))
             owner += [rid] * len(s["centre_z"])
+        # a keep-out loop, copied at heights less than the clearance apart over every level:
+        # no height of the ramp clears it
+        step = st.fit.clearance_m
+        heights = np.arange(-step, st.levels_m[-1] + 2 * step, step)
+        for rid in sorted(self.keep_out & set(self.rails)):
+            s = self.rails[rid]
+            n = len(s["centre_z"])
+            for h in heights:
+                pts.append(s["centre"])
+                zs.append(np.full(n, h))
+                hw.append(np.full(n, self.width[rid] / 2))
+                owner += [rid] * n
         if pts:
             return Obstacles(np.array(lines), np.concatenate(pts), np.concatenate(zs),
                              np.concatenate(hw), tuple(owner), tuple(names))
@@ -1024,10 +1053,26 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         rseed = (seed * 1_000_003 + k * 7919) % (2**32)
         spec = b.spec(ramp, feat)
         built = _cd_fit(b, ramp, spec) if b._same_road(ramp) else None
+        fit, evals, secs = None, 0, 0.0
         if built is not None and built.ok:
-            fit, evals, secs = built, 0, 0.0
-        else:
-            fit, evals, secs = _fit_with_levels(b, spec, rseed)
+            fit = built
+        elif loops := b.round_loops(ramp):
+            # a cloverleaf's outer connector goes round its loop, not over or under it:
+            # fitted with the loop as an obstacle at every height and one more Bézier piece
+            # to bow out with (without, then with its leads); if it cannot meet its targets
+            # that way, it is fitted as any other ramp
+            b.keep_out = loops
+            more = replace(spec, pieces=spec.pieces + 1)
+            for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
+                kept = fit_ramp(again, b.obstacles(), st.fit, seed=rseed + n)
+                evals, secs = evals + kept.evaluations, secs + kept.seconds
+                if kept.ok and kept.conflicts == 0:
+                    fit = kept
+                    break
+            b.keep_out = frozenset()
+        if fit is None:
+            fit, e2, s2 = _fit_with_levels(b, spec, rseed)
+            evals, secs = evals + e2, secs + s2
         if fit.conflicts:  # make way: refit the ramps it meets, then it again
             fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
             evals, secs = evals + e2, secs + s2
