@@ -33,7 +33,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from flyover.config import load_config  # noqa: E402
-from flyover.geometry.check import same_level_conflicts  # noqa: E402
+from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: E402
 from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
 from flyover.geometry.tables import (  # noqa: E402
@@ -81,8 +81,10 @@ def _build(job: tuple[str, int]) -> tuple:
     if keep:
         out = keep / cid / str(sample)
         write_sample(ic, out / "geometry.json", out / "geometry.parquet")
-    dense = same_level_conflicts(ic.geometry)  # the independent check, not timed
-    return name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes], dense, rebuilt
+    dense = same_level_conflicts(ic.geometry)  # the independent checks, not timed
+    bridges = len(ramp_crossings(ic.geometry))
+    return (name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes], dense, rebuilt,
+            bridges)
 
 
 def main() -> None:
@@ -125,7 +127,9 @@ def main() -> None:
     by_design: dict[str, list[float]] = {}
     dense_bad: dict[str, int] = {}
     rebuilt: dict[str, int] = {}
-    for name, sample, secs, ic_rows, ic_fits, dense, again in done:
+    crossings: dict[str, list[int]] = {}
+    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges in done:
+        crossings.setdefault(name, []).append(bridges)
         if again:
             rebuilt[name] = rebuilt.get(name, 0) + 1
         if dense:
@@ -172,6 +176,10 @@ def main() -> None:
     for name, ls in sorted(lengths.items()):
         print(f"  {name:<17} median {np.median(ls):6.0f}  p95 {np.percentile(ls, 95):6.0f}  "
               f"max {max(ls):6.0f}  (n={len(ls)})")
+    print("ramps crossing ramps in plan (a bridge each; flyover.geometry.check.ramp_crossings) "
+          "per interchange:")
+    for name, xs in sorted(crossings.items()):
+        print(f"  {name:<17} mean {np.mean(xs):5.2f}  max {max(xs):3d}  (n={len(xs)})")
     rng = np.random.default_rng(0)
     pick = rng.choice(len(fits), size=min(args.plain_ramps, len(fits)), replace=False)
     engines = {"flyover DE (JADE, compiled objective)": settings.fit,

@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from flyover.geometry.bezier import sample_spline
-from flyover.geometry.layout import GeometryError, LayoutSettings, RampFeatures, build_interchange
-from flyover.geometry.check import same_level_conflicts
+from flyover.geometry.layout import (
+    GeometryError, LayoutSettings, RampFeatures, _stations, build_interchange,
+)
+from flyover.geometry.check import ramp_crossings, same_level_conflicts
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.profile import evaluate_polys
 from flyover.topology.catalog import catalog_topologies
@@ -311,6 +313,48 @@ def test_outer_connector_attaches_where_an_arc_at_its_radius_clears_the_loop():
     # inside it) and the loop's are 3.5 m apart at least, so their lanes do not touch
     assert gap.min() >= 1.5
     assert rail.lo > t.max()  # and beyond the loop's reach along A1
+
+
+def _plan_crossing(p: np.ndarray, q: np.ndarray) -> bool:
+    """Whether two polylines cross in plan (any pair of segments properly intersects)."""
+    def orient(u, v, w):
+        return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+                - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
+    a0, a1, b0, b1 = p[:-1, None], p[1:, None], q[None, :-1], q[None, 1:]
+    return bool(((orient(a0, a1, b0) * orient(a0, a1, b1) < 0)
+                 & (orient(b0, b1, a0) * orient(b0, b1, a1) < 0)).any())
+
+
+def test_cloverleaf_outer_connectors_go_round_their_loops_not_over_them(monkeypatch):
+    """A cloverleaf's outer connector and its quadrant's loop connect the same two roads,
+    at heights that let them cross (both climb between the two levels); a real one goes
+    round the loop. Fitted with the loop as an obstacle at every height, none crosses its
+    loop in plan; with that rule off, the same feature set has connectors over loops."""
+    from flyover.geometry import layout  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverleaf"]
+    slopes = {"lA1": 2, "lA2": 3, "lB1": 1, "lB2": 5, "oA1": 4, "oA2": 1, "oB1": 4, "oB2": 3}
+    feats = {r: RampFeatures(150.0, float(g)) for r, g in slopes.items()}  # catalog sample 3
+    lanes = {"A1": 4, "A2": 4, "B1": 3, "B2": 4}
+
+    def crossings(ic):
+        lanes = {o.ramp: _stations(o.fit, 60, o.fit.spec.width_m / 2)["xy"] for o in ic.outcomes}
+        return {(lp, o) for lp in lanes if lp.startswith("l") for o in lanes
+                if o.startswith("o") and _plan_crossing(lanes[lp][3:-3], lanes[o][3:-3])}
+
+    ic = build_interchange(t, lanes, feats, seed=430509475)
+    assert all(o.fit.ok and o.fit.conflicts == 0 for o in ic.outcomes)
+    assert crossings(ic) == set()
+    assert not {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)
+                if c.ramp.startswith("l") and c.other.startswith("o")}
+    monkeypatch.setattr(layout._Builder, "round_loops", lambda self, ramp: frozenset())
+    over = build_interchange(t, lanes, feats, seed=430509475)
+    assert crossings(over)
+    # the check module finds the same bridges (independently: segment pairs via a k-d tree)
+    found = ramp_crossings(over.geometry)
+    assert {(c.ramp, c.other) for c in found if c.ramp.startswith("l")
+            and c.other.startswith("o")} == crossings(over)
+    assert all(abs(c.dz_m) >= 5.4 for c in found)  # bridges, none at one level
 
 
 def test_ramps_on_long_wiggling_ramps_meet_their_attachment_within_1_cm():

@@ -36,7 +36,7 @@ from flyover.geometry.bezier import lane_centre, sample_spline
 from flyover.geometry.model import InterchangeGeometry, RampGeometry
 from flyover.geometry.profile import evaluate_polys
 
-__all__ = ["Conflict", "same_level_conflicts"]
+__all__ = ["Conflict", "Crossing", "ramp_crossings", "same_level_conflicts"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,17 @@ class Conflict:
     other: str
     s_m: float
     length_m: float
+    dz_m: float
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """Ramp ``ramp`` passes over or under ``other`` (a ramp) at its station ``s_m``,
+    ``dz_m`` apart in height (signed: ``ramp`` above ``other`` when positive)."""
+
+    ramp: str
+    other: str
+    s_m: float
     dz_m: float
 
 
@@ -117,3 +128,63 @@ def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.
                     hit[i] = d < clearance_m
             out += _runs(a, b, s, hit, dz, spacing_m)
     return tuple(out)
+
+
+def ramp_crossings(geometry: InterchangeGeometry, *, spacing_m: float = 2.0,
+                   end_zone_m: float = 15.0) -> tuple[Crossing, ...]:
+    """Where two ramps cross in plan (their lane centres intersect, outside their end
+    zones): each is a ramp bridge, and none is at one level when
+    :func:`same_level_conflicts` finds nothing. Pairs attached to each other are
+    skipped (they meet where one leaves or joins the other); each pair is reported
+    once, by the first ramp id.
+
+    Example
+    -------
+    >>> from flyover.geometry.model import InterchangeGeometry
+    >>> ramp_crossings(InterchangeGeometry(class_id="c0", sample=0, seed=1))
+    ()
+    """
+    lanes = {}
+    for r in geometry.ramps:
+        xy, z, s, length = _lane_centre(r, r.lanes * geometry.ramp_lane_width_m, spacing_m)
+        inner = (s > end_zone_m) & (s < length - end_zone_m)
+        lanes[r.id] = (xy[inner], z[inner], s[inner])
+    attached = {frozenset((r.id, a.parent)) for r in geometry.ramps
+                for a in (r.start, r.end) if a is not None}
+    out: list[Crossing] = []
+    ids = sorted(i for i in lanes if len(lanes[i][0]) > 1)
+    trees = {i: cKDTree(0.5 * (lanes[i][0][1:] + lanes[i][0][:-1])) for i in ids}
+    reach = {i: float(np.linalg.norm(np.diff(lanes[i][0], axis=0), axis=1).max()) for i in ids}
+    for a_i, a in enumerate(ids):
+        pa, za, sa = lanes[a]
+        for b in ids[a_i + 1:]:
+            if frozenset((a, b)) in attached:
+                continue
+            pb, zb, sb = lanes[b]
+            # segments that intersect have midpoints within half their lengths' sum
+            near = trees[a].query_ball_tree(trees[b], 0.5 * (reach[a] + reach[b]) + 1e-9)
+            hits = []
+            for i, js in enumerate(near):
+                if not js:
+                    continue
+                j = np.asarray(js)
+                p0, p1, q0, q1 = pa[i], pa[i + 1], pb[j], pb[j + 1]
+                d1 = _orient(p0, p1, q0)
+                d2 = _orient(p0, p1, q1)
+                d3 = _orient(q0, q1, p0)
+                d4 = _orient(q0, q1, p1)
+                for k in j[(d1 * d2 < 0) & (d3 * d4 < 0)]:
+                    hits.append((float(sa[i]), float(za[i] - zb[k])))
+            hits.sort()
+            last = -np.inf
+            for s_m, dz in hits:
+                if s_m - last > 2.0 * spacing_m:  # one crossing, not its neighbouring segments
+                    out.append(Crossing(a, b, s_m, dz))
+                last = s_m
+    return tuple(out)
+
+
+def _orient(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Twice the signed area of triangles (u, v, w): > 0 when w is left of u → v."""
+    return ((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+            - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
