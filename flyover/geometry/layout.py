@@ -333,8 +333,6 @@ class _Builder:
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
         self.width = {r: self._lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.plan = self._level_plan()
-        #: fitted loops that the ramp being fitted must not cross in plan, at any height
-        self.keep_out: frozenset[str] = frozenset()
 
     def _level_plan(self) -> dict[str, float]:
         """Crest heights fixed up front: the direct left turns.
@@ -636,13 +634,11 @@ class _Builder:
         clear = np.ones(len(s), bool)
         for k in np.linspace(off - width + 0.5, off + 1.0, 5):  # across the child's lane
             q = xy + k * left
-            for r in self.roads.values():
-                d = np.array([math.cos(r.heading), math.sin(r.heading)])
-                rel = q - np.asarray(r.origin)
-                along, lat = rel @ d, rel @ np.array([-d[1], d[0]])
-                clear &= ~((along >= r.t_lo) & (along <= r.t_hi)
-                           & (lat >= -r.lanes * self.st.lane_width_m) & (lat <= 0.0)
-                           & (np.abs(z - r.z) < self.st.fit.clearance_m))
+            for x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, zr in self._road_lines():
+                rel = q - (x0, y0)
+                along, lat = rel @ (dx, dy), rel @ (-dy, dx)
+                clear &= ~((along >= t_lo) & (along <= t_hi) & (lat >= lat_lo) & (lat <= lat_hi)
+                           & (np.abs(z - zr) < self.st.fit.clearance_m))
         inside = (s >= lo) & (s <= hi)
         if clear[inside].all() or not clear.any():
             return lo, hi
@@ -779,15 +775,21 @@ class _Builder:
             return self._road_rail(node, ramp, label, is_start, loop, pos, width, extra)
         return self._ramp_rail(node, label, is_start, width)
 
-    def obstacles(self) -> Obstacles:
-        st = self.st
-        lines = []
-        names = []
+    def _road_lines(self) -> np.ndarray:
+        """The roads' driving bands as :attr:`Obstacles.lines` rows (in ``roads`` order)."""
+        rows = []
         for r in self.roads.values():
             d = (math.cos(r.heading), math.sin(r.heading))
-            lines.append([r.origin[0], r.origin[1], d[0], d[1], max(r.t_lo, -1e5),
-                          min(r.t_hi, 1e5), -r.lanes * st.lane_width_m, 0.0, r.z])
-            names.append(r.id)
+            rows.append([r.origin[0], r.origin[1], d[0], d[1], max(r.t_lo, -1e5),
+                         min(r.t_hi, 1e5), -r.lanes * self.st.lane_width_m, 0.0, r.z])
+        return np.array(rows)
+
+    def obstacles(self, keep_out: frozenset[str] = frozenset()) -> Obstacles:
+        """Roads and fitted ramps; the fitted ramps in ``keep_out`` at every height (a
+        ramp must not cross them in plan at all)."""
+        st = self.st
+        lines = self._road_lines()
+        names = [r.id for r in self.roads.values()]
         pts, zs, hw, owner = [], [], [], []
         for rid, s in self.rails.items():
             pts.append(s["centre"])
@@ -798,7 +800,7 @@ class _Builder:
         # no height of the ramp clears it
         step = st.fit.clearance_m
         heights = np.arange(-step, st.levels_m[-1] + 2 * step, step)
-        for rid in sorted(self.keep_out & set(self.rails)):
+        for rid in sorted(keep_out & set(self.rails)):
             s = self.rails[rid]
             n = len(s["centre_z"])
             for h in heights:
@@ -807,9 +809,9 @@ class _Builder:
                 hw.append(np.full(n, self.width[rid] / 2))
                 owner += [rid] * n
         if pts:
-            return Obstacles(np.array(lines), np.concatenate(pts), np.concatenate(zs),
+            return Obstacles(lines, np.concatenate(pts), np.concatenate(zs),
                              np.concatenate(hw), tuple(owner), tuple(names))
-        return Obstacles(np.array(lines), line_names=tuple(names))
+        return Obstacles(lines, line_names=tuple(names))
 
     def unrecord(self, ramp: str) -> None:
         """Forget a fitted ramp (to fit it again): its fit, stations and attachments."""
@@ -1061,15 +1063,13 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # fitted with the loop as an obstacle at every height and one more Bézier piece
             # to bow out with (without, then with its leads); if it cannot meet its targets
             # that way, it is fitted as any other ramp
-            b.keep_out = loops
             more = replace(spec, pieces=spec.pieces + 1)
             for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
-                kept = fit_ramp(again, b.obstacles(), st.fit, seed=rseed + n)
+                kept = fit_ramp(again, b.obstacles(loops), st.fit, seed=rseed + n)
                 evals, secs = evals + kept.evaluations, secs + kept.seconds
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
                     break
-            b.keep_out = frozenset()
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2
