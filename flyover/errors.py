@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["FlyoverError", "TopologyError", "InputFormatError", "ConfigError"]
+__all__ = ["FlyoverError", "TopologyError", "InputFormatError", "ConfigError", "UnsafeNameError"]
 
 
 class FlyoverError(Exception):
@@ -48,3 +48,8 @@ class InputFormatError(FlyoverError):
 
 class ConfigError(FlyoverError):
     """The workflow configuration fails its schema."""
+
+
+class UnsafeNameError(InputFormatError):
+    """A name that would become a file or folder name is not a safe name
+    (:mod:`flyover.topology.names`: ASCII letters, digits, ``. _ -``, at most 100)."""

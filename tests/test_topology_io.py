@@ -103,23 +103,46 @@ def test_flyover_dataset_graphml_imports_including_junc_middle(tmp_path):
     path = tmp_path / "flyover_T.graphml"
     path.write_text(flyover_graphml(T_NODES, T_EDGES))
     t = read_graphml(path)
-    assert t.roads == ("A1", "A2", "B1", "B2") and t.n_ramps == 4
-    assert t.expressways == {"A": ("A1", "A2"), "B": ("B1", "B2")}
-    assert t.graph.edges["B1", "rL"]["label"] is Label.OUT_M
-    assert t.graph.edges["rA2", "B2"]["label"] is Label.IN_M
-    assert t.graph.edges["A1", "rA1"]["pos"] == pytest.approx(0.3)
-    assert t.graph.nodes["B1"]["lanes"] == 4
-    assert t.graph.nodes["rA1"]["radius"] == pytest.approx(150.0)
+    # nodes are keyed on their GraphML id; the dataset's name is kept as an attribute
+    node = {d["name"]: n for n, d in t.graph.nodes(data=True)}
+    assert t.roads == ("n0", "n1", "n2", "n3") and t.n_ramps == 4
+    assert [node[r] for r in ("A1", "A2", "B1", "B2")] == ["n0", "n1", "n2", "n3"]
+    assert t.expressways == {"A": ("n0", "n1"), "B": ("n2", "n3")}
+    assert t.graph.edges[node["B1"], node["rL"]]["label"] is Label.OUT_M
+    assert t.graph.edges[node["rA2"], node["B2"]]["label"] is Label.IN_M
+    assert t.graph.edges[node["A1"], node["rA1"]]["pos"] == pytest.approx(0.3)
+    assert t.graph.nodes[node["B1"]]["lanes"] == 4
+    assert t.graph.nodes[node["rA1"]]["radius"] == pytest.approx(150.0)
     assert t.shape == "T"
     # this is the catalog's semi-directional T, whatever the node names
     assert class_id(t) == class_id(catalog_topologies()["semidirectional_t"])
+
+
+def test_flyover_dataset_repeated_node_names_are_read_by_node_id(tmp_path):
+    """The published dataset repeats `name` within a file (ids are unique): not an error."""
+    renamed = {"rR": "r", "rL": "r", "rA1": "r", "rA2": "r2"}  # three ramps called 'r'
+    nodes = [(typ, renamed.get(name, name), lane) for typ, name, lane in T_NODES]
+    text = flyover_graphml(T_NODES, T_EDGES)
+    for (_, old, _), (_, new, _) in zip(T_NODES, nodes):
+        text = text.replace(f'<data key="d1">{old}</data>', f'<data key="d1">{new}</data>')
+    assert text.count('<data key="d1">r</data>') == 3
+    path = tmp_path / "repeated.graphml"
+    path.write_text(text)
+    t = read_graphml(path)
+    assert t.n_roads == 4 and t.n_ramps == 4
+    assert sorted(d["name"] for _, d in t.graph.nodes(data=True)) == sorted(n for _, n, _ in nodes)
+    assert class_id(t) == class_id(catalog_topologies()["semidirectional_t"])
+    # and the name survives a round trip through native GraphML
+    write_graphml(t, tmp_path / "native.graphml")
+    back = read_graphml(tmp_path / "native.graphml")
+    assert back.graph.nodes["n4"]["name"] == "r" and class_id(back) == class_id(t)
 
 
 def test_flyover_dataset_bad_junc_is_named(tmp_path):
     path = tmp_path / "bad.graphml"
     edges = [e if e[0] != "A1" else ("A1", "rA1", "out", "up", 0.3) for e in T_EDGES]
     path.write_text(flyover_graphml(T_NODES, edges))
-    with pytest.raises(TopologyError, match=r"bad.graphml: A1->rA1: unknown junc 'up'"):
+    with pytest.raises(TopologyError, match=r"bad.graphml: n0 \(A1\)->n6 \(rA1\): unknown junc 'up'"):
         read_graphml(path)
 
 

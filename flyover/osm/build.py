@@ -42,8 +42,9 @@ from flyover.errors import TopologyError
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
 from flyover.osm.reader import OsmNetwork, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
+from flyover.topology.names import MAX_NAME_LENGTH, safe_name
 
-__all__ = ["OsmOptions", "build_topologies"]
+__all__ = ["OsmOptions", "build_topologies", "interchange_name"]
 
 log = logging.getLogger(__name__)
 
@@ -635,6 +636,22 @@ def _compact(ref: str) -> str:
     return "".join(ch for ch in ref.replace(";", "-") if ch.isalnum() or ch == "-")
 
 
+def interchange_name(corridors: list[str], first_node: int) -> tuple[str, dict]:
+    """The interchange's name ``{refs}_{first OSM node id}`` as a safe name, and what it
+    was made from (corridor ref → its part of the name; the OSM node).
+
+    Refs are data (``"I 70;US 40"``, ``"A 1/E 20"``, any script): each becomes a safe
+    part by :func:`flyover.topology.names.safe_name` (``;`` and other unsafe
+    characters → ``-``); a name longer than the limit is cut and ends in a hash.
+
+    >>> interchange_name(["I70;US40", "A1/E20"], 42)
+    ('I70-US40_A1-E20_42', {'refs': {'I70;US40': 'I70-US40', 'A1/E20': 'A1-E20'}, 'osm_node': 42})
+    """
+    parts = {c: safe_name(c, max_length=40) for c in corridors}
+    name = safe_name("_".join(parts.values()) + f"_{first_node}", max_length=MAX_NAME_LENGTH)
+    return name, {"refs": parts, "osm_node": first_node}
+
+
 def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     """Every motorway-to-motorway interchange of ``net`` as a topology.
 
@@ -729,7 +746,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     junction_nodes = sorted({e[3] for e in edges})
     corridors = sorted({b.groups[g].corridor for g in road_gids})
     first_node = min((n for n in junction_nodes if n > 0), default=abs(min(junction_nodes)))
-    name = "_".join(_compact(c) for c in corridors) + f"_{first_node}"
+    name, name_from = interchange_name(corridors, first_node)
 
     # roads: window along each carriageway, heading, expressway pairing
     window, heading = {}, {}
@@ -830,4 +847,5 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }
     return Topology.build(name, roads, ramps, conns, source=nw.src, node_attrs=node_attrs,
-                          attrs={"format": "osm", "osm": osm, "osm_nodes": junction_nodes})
+                          attrs={"format": "osm", "osm": osm, "osm_nodes": junction_nodes,
+                                 "name_from": name_from})

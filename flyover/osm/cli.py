@@ -32,6 +32,7 @@ def _osm(args) -> int:
     from flyover.osm.plot import plot_osm_topology
     from flyover.topology.canonical import class_id
     from flyover.topology.catalog import catalog_class_names
+    from flyover.topology.names import child_path
 
     options = OsmOptions.from_config(load_config(args.config)) if args.config else default_options()
     names = catalog_class_names()
@@ -52,7 +53,11 @@ def _osm(args) -> int:
                    "expressways": {k: list(v) for k, v in t.expressways.items()},
                    "notes": t.attrs["osm"]["quirks"]}
             if args.plot:
-                png = Path(args.plot) / f"{t.name}.png"
+                try:
+                    png = child_path(Path(args.plot), t.name, ".png", source=str(path))
+                except FlyoverError as exc:
+                    errors.append(exc)
+                    continue
                 png.parent.mkdir(parents=True, exist_ok=True)
                 plot_osm_topology(t, png)
                 row["picture"] = str(png)

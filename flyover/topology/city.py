@@ -14,6 +14,7 @@ from typing import Any, Iterable
 
 from flyover.errors import FlyoverError, TopologyError
 from flyover.topology.io import atomic_write, read_topologies, write_graphml
+from flyover.topology.names import check_name, child_path
 
 __all__ = ["import_city", "CITY_INDEX", "read_city_index"]
 
@@ -29,18 +30,27 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
 
     ``osm_options`` (a :class:`flyover.osm.OsmOptions`) controls how OSM
     extracts are read. Also writes ``{outdir}/index.json``: the interchanges written (name,
-    source file, GraphML path) and the rejections (source file, element,
-    reason). Interchange names must be unique within a city; a later
-    duplicate is rejected.
+    source file, GraphML path; for a name made from data, ``name_from``: what it was
+    made from, e.g. OSM refs → name parts) and the rejections (source file, element,
+    reason). Interchange names must be unique within a city, ignoring case (file
+    systems that ignore case would merge them); a later duplicate is rejected.
+    ``city`` and every interchange name must be safe names
+    (:mod:`flyover.topology.names`): nothing is written outside ``outdir``.
+
+    Raises
+    ------
+    UnsafeNameError
+        ``city`` is not a safe name (nothing is written).
 
     Returns
     -------
     dict
         The index that was written.
     """
+    check_name(city, what="city name")
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    interchanges, rejected = [], []
+    interchanges, rejected, taken = [], [], set()
     for path in sorted(map(str, files)):
         try:
             topologies = read_topologies(path, osm_options=osm_options)
@@ -51,18 +61,25 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
                              "reason": exc.reason})
             continue
         for t in topologies:
-            if any(i["interchange"] == t.name for i in interchanges):
-                exc = TopologyError("duplicate interchange name in this city", source=path, element=t.name)
+            try:
+                target = child_path(outdir, t.name, ".graphml", source=path)
+                if t.name.lower() in taken:
+                    raise TopologyError("duplicate interchange name in this city (case ignored)",
+                                        source=path, element=t.name)
+            except FlyoverError as exc:
                 log.warning("rejected %s", exc.one_line())
-                rejected.append({"city": city, "source_file": path, "element": t.name, "reason": exc.reason})
+                rejected.append({"city": city, "source_file": path, "element": exc.element or "",
+                                 "reason": exc.reason})
                 continue
-            target = outdir / f"{t.name}.graphml"
+            taken.add(t.name.lower())
             write_graphml(t, target)
             if "osm" in t.attrs:  # OSM import: its geometry picture beside the GraphML
                 from flyover.osm.plot import plot_osm_topology  # noqa: PLC0415 (optional stage)
-                plot_osm_topology(t, outdir / f"{t.name}.png")
-            interchanges.append({"city": city, "interchange": t.name, "source_file": path,
-                                 "graphml": str(target)})
+                plot_osm_topology(t, child_path(outdir, t.name, ".png", source=path))
+            item = {"city": city, "interchange": t.name, "source_file": path, "graphml": str(target)}
+            if t.attrs.get("name_from"):
+                item["name_from"] = t.attrs["name_from"]
+            interchanges.append(item)
             log.info("%s: %s", path, t.summary())
     index = {"city": city, "interchanges": interchanges, "rejected": rejected}
     atomic_write(outdir / CITY_INDEX, json.dumps(index, indent=2, sort_keys=True).encode())

@@ -34,7 +34,9 @@ import networkx as nx
 import yaml
 
 from flyover.errors import FlyoverError, InputFormatError, TopologyError
+from flyover.safe_yaml import load_yaml
 from flyover.topology.model import Connection, Kind, Label, Ramp, Road, Topology
+from flyover.topology.names import check_name
 
 __all__ = [
     "TOPOLOGY_SUFFIXES",
@@ -135,12 +137,33 @@ def read_graphml(path: str | os.PathLike, name: str | None = None) -> Topology:
     try:
         g = nx.read_graphml(path, force_multigraph=True)
     except (ParseError, nx.NetworkXError, ValueError, KeyError) as exc:
-        raise InputFormatError(f"not readable as GraphML: {exc}", source=src) from None
-    name = name or g.graph.get("name") or Path(path).stem
+        raise InputFormatError(f"not readable as GraphML: {_first_line(exc)}", source=src) from None
+    name = check_name(name or g.graph.get("name") or Path(path).stem, source=src)
     node_keys = set().union(*(d.keys() for _, d in g.nodes(data=True))) if g.nodes else set()
     if "type" in node_keys and "kind" not in node_keys:
         return _from_flyover_graph(g, name, src)
     return _from_native_graph(g, name, src)
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return (text.splitlines()[0] if text else type(exc).__name__)[:300]
+
+
+def _lanes(value: Any, src: str | None, el: str) -> int | None:
+    """A lane count from a file: a positive integer (``None`` when absent)."""
+    if value is None or value == "":
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, str)):
+        number = None
+    else:
+        try:
+            number = int(value)
+        except ValueError:
+            number = None
+    if number is None or number < 1:
+        raise TopologyError(f"lanes must be a positive integer, got {value!r}"[:300], source=src, element=el)
+    return number
 
 
 def _edges_checked(g: nx.MultiDiGraph, src: str):
@@ -158,8 +181,7 @@ def _from_native_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
         extras[n] = {k: v for k, v in d.items() if k not in _CORE_NODE_KEYS}
         kind = d.get("kind")
         if kind == Kind.ROAD.value:
-            lanes = d.get("lanes")
-            roads.append(Road(n, str(d.get("expressway", "")), None if lanes is None else int(lanes)))
+            roads.append(Road(n, str(d.get("expressway", "")), _lanes(d.get("lanes"), src, n)))
         elif kind == Kind.RAMP.value:
             ramps.append(Ramp(n))
         else:
@@ -179,62 +201,80 @@ def _pos(value: Any, src: str | None, el: str) -> float | None:
     try:
         return float(value)
     except (TypeError, ValueError):
-        raise TopologyError(f"pos must be a number, got {value!r}", source=src, element=el) from None
+        raise TopologyError(f"pos must be a number, got {_short(value)}", source=src, element=el) from None
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    """``repr(value)``, cut to ``limit`` characters (error messages stay one short line)."""
+    text = repr(value) if not isinstance(value, (list, dict)) else f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 _FLYOVER_NODE_EXTRAS = ("radius", "curv", "geo", "ctrl")
 
 
 def _from_flyover_graph(g: nx.MultiDiGraph, name: str, src: str) -> Topology:
-    ids = {n: str(d.get("name") or n) for n, d in g.nodes(data=True)}
-    if len(set(ids.values())) != len(ids):
-        dup = sorted(v for v in ids.values() if list(ids.values()).count(v) > 1)[0]
-        raise TopologyError("duplicate node name", source=src, element=dup)
+    """The FLYOVER dataset's schema: nodes keyed on their GraphML id (the dataset's
+    ``name`` attribute can repeat within a file); ``name`` is kept as a node attribute
+    and gives a road its expressway (its leading letters)."""
     roads, ramps, extras = [], [], {}
+    shown = {n: n if str(d.get("name") or n) == n else f"{n} ({d.get('name')})"
+             for n, d in g.nodes(data=True)}
     for n, d in g.nodes(data=True):
-        nid, typ = ids[n], d.get("type")
-        extras[nid] = {k: d[k] for k in _FLYOVER_NODE_EXTRAS if k in d}
-        lanes = d.get("lane")
+        el, typ = shown[n], d.get("type")
+        extras[n] = {k: d[k] for k in _FLYOVER_NODE_EXTRAS if k in d}
+        label = str(d["name"]) if d.get("name") not in (None, "") else n
+        if "name" in d:
+            extras[n]["name"] = label
+        lanes = _lanes(d.get("lane"), src, el)
         if typ == "main":
-            m = re.match(r"[A-Za-z]+", nid)
+            m = re.match(r"[A-Za-z]+", label)
             if not m:
-                raise TopologyError("road name must start with its expressway letter", source=src, element=nid)
-            roads.append(Road(nid, m.group(0), None if lanes in (None, "") else int(lanes)))
+                raise TopologyError("road name must start with its expressway letter", source=src, element=el)
+            roads.append(Road(n, m.group(0), lanes))
         elif typ == "link":
-            if lanes not in (None, ""):
-                extras[nid]["lanes"] = int(lanes)
-            ramps.append(Ramp(nid))
+            if lanes is not None:
+                extras[n]["lanes"] = lanes
+            ramps.append(Ramp(n))
         else:
-            raise TopologyError(f"unknown node type {typ!r} (expected main or link)", source=src, element=nid)
+            raise TopologyError(f"unknown node type {typ!r} (expected main or link)"[:300], source=src,
+                                element=el)
     conns = []
     for u, v, d in _edges_checked(g, src):
-        el = f"{ids[u]}->{ids[v]}"
+        el = f"{shown[u]}->{shown[v]}"
         ramp, junc = d.get("ramp"), d.get("junc")
         if ramp not in ("out", "in"):
-            raise TopologyError(f"unknown ramp {ramp!r} (expected out or in)", source=src, element=el)
+            raise TopologyError(f"unknown ramp {ramp!r} (expected out or in)"[:300], source=src, element=el)
         if junc not in ("right", "left", "middle"):
-            raise TopologyError(f"unknown junc {junc!r} (expected right, left or middle)",
+            raise TopologyError(f"unknown junc {junc!r} (expected right, left or middle)"[:300],
                                 source=src, element=el)
-        conns.append(Connection(ids[u], ids[v], Label.of(ramp == "out", junc),
-                                _pos(d.get("part"), src, el)))
+        conns.append(Connection(u, v, Label.of(ramp == "out", junc), _pos(d.get("part"), src, el)))
     return Topology.build(name, roads, ramps, conns, source=src, node_attrs=extras,
                           attrs={"format": "flyover-graphml"})
 
 
 # -- YAML spec ----------------------------------------------------------------
 
-_ENDPOINT = re.compile(r"^\s*(?P<node>\S+)\s+(?P<side>\w+)\s*(?:@\s*(?P<pos>\S+))?\s*$")
+
+def _endpoint(item: Any) -> tuple[str, str, str | None] | None:
+    """``"<node> <side> [@<pos>]"`` → (node, side word, pos text), ``None`` if malformed.
+
+    Parsed by splitting, not a regular expression: linear in the text whatever it holds.
+    """
+    if not isinstance(item, str):
+        return None
+    head, at, pos = item.partition("@")
+    parts = head.split()
+    pos = pos.strip() if at else None
+    if len(parts) != 2 or parts[1] not in _SIDE_WORDS or (at and (not pos or len(pos.split()) != 1)):
+        return None
+    return parts[0], parts[1], pos
 
 
 def read_yaml_spec(path: str | os.PathLike) -> Topology:
     """Read a YAML spec (format in the module docstring and the README)."""
     src = str(path)
-    try:
-        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        line = getattr(getattr(exc, "problem_mark", None), "line", None)
-        where = f" (line {line + 1})" if line is not None else ""
-        raise InputFormatError(f"malformed YAML{where}: {str(exc).splitlines()[0]}", source=src) from None
+    doc = load_yaml(path, error=InputFormatError)
     return topology_from_spec(doc, src, default_name=Path(path).stem)
 
 
@@ -253,12 +293,18 @@ def topology_from_spec(doc: Any, src: str | None, default_name: str = "interchan
     lanes = doc.get("lanes") or {}
     if not isinstance(lanes, dict):
         raise InputFormatError("'lanes' must map carriageways to integers", source=src, element="lanes")
+    name = doc.get("name")
+    if name is None or name == "":
+        name = default_name
+    elif isinstance(name, bool) or not isinstance(name, (str, int)):
+        raise InputFormatError(f"'name' must be a text, got {_short(name)}", source=src, element="name")
+    name = check_name(str(name), source=src)
     roads = []
     for exp, cws in exps.items():
         if not isinstance(cws, list) or not all(isinstance(c, str) for c in cws):
             raise InputFormatError("carriageways must be a list of names", source=src,
                                    element=f"expressways.{exp}")
-        roads += [Road(c, str(exp), lanes.get(c)) for c in cws]
+        roads += [Road(c, str(exp), _lanes(lanes.get(c), src, f"lanes.{c}")) for c in cws]
     road_ids = {r.id for r in roads}
     for c in lanes:
         if c not in road_ids:
@@ -274,17 +320,20 @@ def topology_from_spec(doc: Any, src: str | None, default_name: str = "interchan
             raise InputFormatError("a ramp is {from: ..., to: ...}", source=src, element=f"ramps.{rid}")
         for key, is_out in (("from", True), ("to", False)):
             items = ends.get(key) or []
+            el = f"ramps.{rid}.{key}"
+            if not isinstance(items, (str, list)):
+                raise InputFormatError(f"'{key}' must be one endpoint or a list of them", source=src,
+                                       element=el)
             for item in [items] if isinstance(items, str) else items:
-                el = f"ramps.{rid}.{key}"
-                m = _ENDPOINT.match(str(item))
-                if not m or m["side"] not in _SIDE_WORDS:
-                    raise InputFormatError(f"endpoint {item!r} is not '<node> right|left|straight [@pos]'",
+                parsed = _endpoint(item)
+                if parsed is None:
+                    raise InputFormatError(f"endpoint {_short(item)} is not '<node> right|left|straight [@pos]'",
                                            source=src, element=el)
-                other, side = m["node"], _SIDE_WORDS[m["side"]]
-                label = Label.of(is_out, side)
+                other, side, pos = parsed
+                label = Label.of(is_out, _SIDE_WORDS[side])
                 edge = (other, rid) if is_out else (rid, other)
-                conns.append(Connection(*edge, label, _pos(m["pos"], src, el)))
-    return Topology.build(str(doc.get("name") or default_name), roads, ramps, conns, source=src,
+                conns.append(Connection(*edge, label, _pos(pos, src, el)))
+    return Topology.build(name, roads, ramps, conns, source=src,
                           attrs={k: doc[k] for k in ("design", "source") if k in doc})
 
 

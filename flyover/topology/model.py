@@ -264,8 +264,8 @@ def _check_parts(roads: list[Road], ramps: list[Ramp], conns: list[Connection],
     for r in roads:
         if not r.expressway:
             raise _fail("road has no expressway", source, r.id)
-        if r.lanes is not None and (not isinstance(r.lanes, int) or r.lanes < 1):
-            raise _fail(f"lanes must be a positive integer, got {r.lanes!r}", source, r.id)
+        if r.lanes is not None and (isinstance(r.lanes, bool) or not isinstance(r.lanes, int) or r.lanes < 1):
+            raise _fail(f"lanes must be a positive integer, got {r.lanes!r}"[:200], source, r.id)
     seen: set[tuple[str, str]] = set()
     for c in conns:
         el = c.element
@@ -311,11 +311,15 @@ def _check_graph(topo: Topology) -> None:
                         src, f"expressway {name}")
     entering = [n for n in topo.roads
                 if not any(d["label"] is Label.IN_M for _, _, d in g.in_edges(n, data=True))]
-    reached: set[str] = set()
-    for r in entering:
-        reached |= nx.descendants(g, r) | {r}
+    reached, todo = set(entering), list(entering)  # one traversal: linear in the graph
+    while todo:
+        for v in g.successors(todo.pop()):
+            if v not in reached:
+                reached.add(v)
+                todo.append(v)
     missing = sorted(set(g.nodes) - reached)
     if missing:
-        raise _fail("unreachable from any entering road", src, ", ".join(missing))
+        more = f" and {len(missing) - 10} more" if len(missing) > 10 else ""
+        raise _fail("unreachable from any entering road", src, ", ".join(missing[:10]) + more)
     if not topo.ramps:
         raise _fail("topology has no ramps", src, None)
