@@ -21,8 +21,16 @@ rule all:
         "results/rejected.parquet",
         "results/classes/manifest.json",
         class_topology_outputs,
-        "results/validation.parquet",
-        export_outputs,
-        "results/geometry.parquet",
         "results/coverage.parquet",
+        "results/geometry.parquet",
+        class_tables("export"),
+        "results/validation.parquet",
     default_target: True
+
+
+onsuccess:
+    print_summary(log)
+
+
+onerror:
+    print_summary(log, failed=True)

@@ -10,7 +10,16 @@ standard library and the checker's own packages (inside :func:`main`)::
 ``JOBS.json``::
 
     {"configs": ["a/config.xml", ...],          # the checker's own config files
+     "excluded_by": [null, "1.8.0", ...],       # per config (optional): see below
      "xsd11": [["OpenDRIVE_Core.xsd", "b.xodr"], ...]}
+
+``excluded_by`` ``V`` runs, of the version-bound checkers, only those that do
+*not* apply to OpenDRIVE ``V`` (the bundle's own ``check_version`` decides);
+the checkers the others take as preconditions (the basic ones and the schema
+check against the file's own version) run as always. flyover uses it on an
+interchange's rendition in the other version, which differs from the file in
+the declared version alone: every checker that applies to the file's version
+has run on the file itself, with the same content.
 
 For every config this does what ``python -m qc_opendrive -c config.xml``
 does (:func:`qc_opendrive.main.main`): a fresh ``Configuration`` and
@@ -52,7 +61,33 @@ class _MemoXmlschema:
         return self._schemas[source]
 
 
-def _run_config(path, bundle):
+class _Sink:
+    """A result that forgets what it is told (to ask ``check_version`` without recording)."""
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: None
+
+
+def _only_excluded_by(main, version):
+    """``main.execute_checker`` that runs a version-bound checker only when ``version`` is
+    outside its applicable versions."""
+    import types
+
+    from qc_opendrive.basic_preconditions import CHECKER_PRECONDITIONS
+
+    run = main.execute_checker
+    probe = types.SimpleNamespace(schema_version=version, result=_Sink())
+
+    def execute_checker(checker, checker_data, version_required=True):
+        if version_required and checker.CHECKER_ID not in CHECKER_PRECONDITIONS and \
+                main.check_version(checker, probe):
+            return None  # applies to ``version``: it ran on the file of that version
+        return run(checker, checker_data, version_required)
+
+    return execute_checker
+
+
+def _run_config(path, bundle, excluded_by=None):
     from qc_baselib import Configuration, Result
 
     main, constants = bundle
@@ -62,7 +97,13 @@ def _run_config(path, bundle):
     result.register_checker_bundle(name=constants.BUNDLE_NAME, description="OpenDrive checker bundle",
                                    version=constants.BUNDLE_VERSION, summary="")
     result.set_result_version(version=constants.BUNDLE_VERSION)
-    main.run_checks(config, result)
+    execute = main.execute_checker
+    if excluded_by:
+        main.execute_checker = _only_excluded_by(main, excluded_by)
+    try:
+        main.run_checks(config, result)
+    finally:
+        main.execute_checker = execute
     result.copy_param_from_config(config)
     result.write_to_file(config.get_checker_bundle_param(checker_bundle_name=constants.BUNDLE_NAME,
                                                          param_name="resultFile"),
@@ -98,8 +139,9 @@ def main(argv):
     memo = _MemoXmlschema(xmlschema)
     valid_schema.xmlschema = memo
     out = {"startup_seconds": round(time.perf_counter() - t0, 4), "configs": [], "xsd11": []}
-    for path in jobs.get("configs", []):
-        _, error, seconds = _timed(_run_config, path, (qc_main, constants))
+    configs = jobs.get("configs", [])
+    for path, excluded_by in zip(configs, jobs.get("excluded_by") or [None] * len(configs)):
+        _, error, seconds = _timed(_run_config, path, (qc_main, constants), excluded_by)
         out["configs"].append({"seconds": seconds, "error": error})
     for schema_path, xodr in jobs.get("xsd11", []):
         errors, error, seconds = _timed(_xsd11_errors, schema_path, xodr, memo)

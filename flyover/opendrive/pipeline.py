@@ -33,7 +33,8 @@ from flyover.opendrive.validate import CHECKS, CheckResult, validate_xodr
 from flyover.opendrive.writer import ExportOptions, xodr_bytes
 
 __all__ = ["VALIDATION_SCHEMA", "PIPELINE_CHECKS", "export_options", "export_interchange",
-           "validate_interchange", "clearance_check", "collect_validation"]
+           "validate_interchange", "clearance_check", "collect_validation", "class_samples",
+           "export_class", "validate_class"]
 
 log = logging.getLogger(__name__)
 
@@ -166,3 +167,150 @@ def collect_validation(tables: Iterable[str | os.PathLike], out: str | os.PathLi
     rows.sort(key=lambda r: (r["class_id"], r["sample"], r["check"]))
     write_parquet(rows, VALIDATION_SCHEMA, out)
     return len(rows)
+
+
+# -- one class per job (the workflow's batches) ---------------------------------------------
+
+#: the files of one interchange that the export stage writes beside its geometry.json
+EXPORT_FILES = ("interchange.xodr", "plan.png", "interchange.net.xml")
+
+
+def class_samples(geometry_table: str | os.PathLike) -> dict[int, str]:
+    """Sample → ``""`` (built) or why it was not built, from a class's ``geometry/{class_id}.parquet``."""
+    rows = pq.read_table(str(geometry_table), columns=["sample", "infeasible"]).to_pylist()
+    out: dict[int, str] = {}
+    for r in rows:
+        why = r["infeasible"] or ""
+        out.setdefault(int(r["sample"]), why if why.startswith("not built") else "")
+    return dict(sorted(out.items()))
+
+
+def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
+                 table: str | os.PathLike, *, class_id: str,
+                 options: ExportOptions | None = None, name: str = "") -> list[dict]:
+    """Export every interchange of one class in one process: ``.xodr``, ``plan.png``, SUMO network.
+
+    For each sample of the class's geometry table, ``{folder}/{sample}/geometry.json``
+    becomes ``interchange.xodr`` (OpenDRIVE), ``plan.png`` and, through netconvert,
+    ``interchange.net.xml``, each written atomically. ``table`` gets the class's
+    ``export`` and ``netconvert`` rows (:data:`VALIDATION_SCHEMA`; the validation
+    stage takes them over): an interchange that cannot be written or converted is
+    a failed row with the one-line error, and none of its export files is left.
+    """
+    from flyover.opendrive.plan import draw_plan  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.validate import netconvert_check  # noqa: PLC0415
+    from flyover.progress import Progress  # noqa: PLC0415
+    from flyover.sumo.netconvert import run_netconvert  # noqa: PLC0415
+    from flyover.topology.io import atomic_write  # noqa: PLC0415
+    from flyover.topology.tables import write_parquet  # noqa: PLC0415
+
+    folder = Path(folder)
+    samples = class_samples(geometry_table)
+    progress = Progress("export", f"{class_id} {name}".strip(), len(samples))
+    rows: list[dict] = []
+    for sample, not_built in samples.items():
+        here = folder / str(sample)
+        geometry = here / "geometry.json"
+        for f in EXPORT_FILES:
+            (here / f).unlink(missing_ok=True)
+        if not_built:
+            results = [CheckResult("export", False, f"{geometry}: {not_built}"),
+                       CheckResult("netconvert", False, "not run: no OpenDRIVE file (export failed)")]
+        else:
+            results = []
+            try:
+                g, data = _write(geometry, options)
+                draw_plan(read_xodr(io.BytesIO(data)), here / "plan.png",
+                          title=f"{g.class_id} sample {g.sample}")
+                atomic_write(here / "interchange.xodr", data)
+            except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
+                error = exc.one_line() if isinstance(exc, FlyoverError) else \
+                    f"{geometry}: {type(exc).__name__}: {exc}"
+                if not isinstance(exc, FlyoverError):
+                    log.exception("export of %s failed", geometry)
+                for f in EXPORT_FILES:
+                    (here / f).unlink(missing_ok=True)
+                results = [CheckResult("export", False, error),
+                           CheckResult("netconvert", False, "not run: no OpenDRIVE file (export failed)")]
+            else:
+                minor = (options or ExportOptions()).opendrive_minor
+                results.append(CheckResult(
+                    "export", True, f"{here / 'interchange.xodr'}: OpenDRIVE 1.{minor}, "
+                    f"{data.count(b'<road ')} roads, {data.count(b'<junction ')} junctions, "
+                    f"{len(data)} bytes"))
+                nc = run_netconvert(here / "interchange.xodr", here / "interchange.net.xml")
+                for w in nc.warnings:
+                    log.info("%s: netconvert %s", here, w)
+                results.append(netconvert_check(nc))
+        for r in results:
+            if not r.ok:
+                log.error("%s %s FAILED: %s", here, r.check, r.detail)
+        rows += [_row(class_id, sample, r) for r in results]
+        progress.done(ok=all(r.ok for r in results))
+    write_parquet(rows, VALIDATION_SCHEMA, table)
+    return rows
+
+
+def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
+                   table: str | os.PathLike, *, class_id: str,
+                   options: ExportOptions | None = None, run_qc: bool = True,
+                   clearance_m: float = 5.5, name: str = "") -> list[dict]:
+    """Validate every interchange of one class: its rows of ``validation.parquet`` → ``table``.
+
+    Reads the files the export stage wrote (``export_class``) and takes over its
+    ``export`` and ``netconvert`` rows; the XSD and ASAM checks of the whole class
+    (both renditions of every interchange) run in one process of the checker's
+    environment; continuity, routes (on the SUMO network the export stage made) and
+    clearance per interchange. Checks that need a file the export could not make
+    fail as ``not run``.
+    """
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.validate import QCItem, continuity_check, qc_checks, routes_check  # noqa: PLC0415
+    from flyover.progress import Progress  # noqa: PLC0415
+    from flyover.topology.tables import write_parquet  # noqa: PLC0415
+
+    folder = Path(folder)
+    exported: dict[int, dict[str, CheckResult]] = {}
+    for r in pq.read_table(str(export_table), schema=VALIDATION_SCHEMA).to_pylist():
+        exported.setdefault(r["sample"], {})[r["check"]] = CheckResult(r["check"], r["ok"], r["detail"])
+    items, item_samples, parsed = [], [], {}
+    for sample, done in sorted(exported.items()):
+        here = folder / str(sample)
+        if not done["export"].ok:
+            continue
+        try:
+            g = read_geometry(here / "geometry.json")
+            xodr = here / "interchange.xodr"
+            parsed[sample] = (g, read_xodr(xodr))
+            items.append(QCItem(xodr, xodr.read_bytes(), parsed[sample][1], g))
+            item_samples.append(sample)
+        except FlyoverError as exc:
+            parsed[sample] = exc.one_line()
+    times: dict[str, float] = {}
+    checked = dict(zip(item_samples, qc_checks(items, options, run_qc, times)))
+    log.info("ASAM checker and XSD 1.1 for %d interchanges: %.1f s", len(items), times.get("asam_qc", 0.0))
+    progress = Progress("validation", f"{class_id} {name}".strip(), len(exported))
+    rows: list[dict] = []
+    for sample, done in sorted(exported.items()):
+        here = folder / str(sample)
+        if sample in checked:
+            g, net = parsed[sample]
+            results = [done["export"], *checked[sample], continuity_check(net), done["netconvert"],
+                       routes_check(here / "interchange.net.xml" if done["netconvert"].ok else None,
+                                    net, g)]
+        else:
+            why = parsed.get(sample, "not run: no OpenDRIVE file (export failed)")
+            results = [done["export"]] + [
+                CheckResult(c, False, why if c != "netconvert" else done["netconvert"].detail)
+                for c in CHECKS]
+        results = [r for r in results if r.check != "asam_qc" or run_qc]
+        results.append(clearance_check(here / "geometry.json", clearance_m))
+        for r in results:
+            failed = not r.ok and not r.detail.startswith("not run")
+            (log.error if failed else log.info)("%s %s %s: %s", here, r.check,
+                                                "ok" if r.ok else "FAILED", r.detail)
+        rows += [_row(class_id, sample, r) for r in results]
+        progress.done(ok=all(r.ok for r in results))
+    write_parquet(rows, VALIDATION_SCHEMA, table)
+    return rows

@@ -66,8 +66,9 @@ def draw_plan(net: XodrNetwork, path: str | os.PathLike, title: str | None = Non
     drive = np.array([chunks[i][0] != "shoulder" for i in order], dtype=bool)
     cmap = plt.get_cmap("viridis")
     norm = plt.Normalize(vmin, vmax)
-    colors = [cmap(norm(chunks[i][2])) if drive[k] else (0.72, 0.72, 0.72, 1.0)
-              for k, i in enumerate(order)]
+    heights = np.array([chunks[i][2] for i in order], dtype=float).reshape(-1)
+    colors = cmap(norm(heights)) if len(order) else np.zeros((0, 4))  # one call, not one per chunk
+    colors[~drive] = (0.72, 0.72, 0.72, 1.0)
     ax.add_collection(PolyCollection(polys, facecolors=colors, edgecolors=colors, linewidths=0.3))
     named: dict[str, list[XodrRoad]] = {}
     for r in net.roads.values():

@@ -154,7 +154,9 @@ def parse_result(path: str | os.PathLike) -> list[CheckerOutcome]:
         issues = []
         for iss in ch.iter("Issue"):
             where = [loc.get("xpath") for loc in iss.iter("XMLLocation")]
-            where += [f"line {loc.get('row')}" for loc in iss.iter("FileLocation")]
+            where += [f"line {loc.get('row')}" + (f": {group.get('description')}"
+                                                  if group.get("description") else "")
+                      for group in iss.iter("Locations") for loc in group.iter("FileLocation")]
             where += [f"({loc.get('x')}, {loc.get('y')}, {loc.get('z')})"
                       for loc in iss.iter("InertialLocation")]
             issues.append(CheckerIssue(ch.get("checkerId"), _LEVELS.get(iss.get("level"), iss.get("level")),
@@ -196,9 +198,15 @@ class QCBatch:
 
 def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
                  xsd11: Sequence[tuple[str | os.PathLike, str | os.PathLike]] = (),
-                 python: Path | None = None, timeout_s: float = 300) -> QCBatch:
+                 python: Path | None = None, timeout_s: float = 300,
+                 excluded_by: Sequence[str | None] | None = None) -> QCBatch:
     """Run the checker bundle on every file of ``xodrs`` and the ``(schema, file)`` XSD 1.1
     validations of ``xsd11``, all in one process of the checker's environment.
+
+    ``excluded_by[i]`` (a version such as ``"1.8.0"``, or ``None``) runs on file ``i``
+    only the version-bound checkers that do not apply to that version (and the basic
+    ones): for a rendition that differs from a file checked in that version only in the
+    declared version.
 
     A file the bundle cannot process gets a :class:`CheckerRun` with ``error``
     set; the others still run. ``timeout_s`` is per file. Raises
@@ -214,8 +222,9 @@ def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
             cfgs.append(str(cfg))
             results.append(res)
         jobs = Path(tmp) / "jobs.json"
-        jobs.write_text(json.dumps({"configs": cfgs, "xsd11": [[str(Path(s).resolve()), str(Path(x).resolve())]
-                                                                for s, x in xsd11]}), encoding="utf-8")
+        jobs.write_text(json.dumps({"configs": cfgs, "excluded_by": list(excluded_by or [None] * len(cfgs)),
+                                    "xsd11": [[str(Path(s).resolve()), str(Path(x).resolve())]
+                                              for s, x in xsd11]}), encoding="utf-8")
         t0 = time.perf_counter()
         try:
             proc = subprocess.run([str(py), str(_DRIVER), str(jobs)], cwd=tmp, capture_output=True,

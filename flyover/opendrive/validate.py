@@ -36,6 +36,7 @@ import os
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Sequence
 
 from lxml import etree
 
@@ -46,7 +47,8 @@ from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import XodrNetwork, read_xodr
 from flyover.opendrive.writer import ExportOptions, xodr_bytes
 
-__all__ = ["CheckResult", "CHECKS", "OtherVersion", "xsd_errors", "other_rendition", "movements",
+__all__ = ["CheckResult", "CHECKS", "OtherVersion", "QCItem", "xsd_errors", "other_rendition",
+           "movements", "qc_checks", "continuity_check", "netconvert_check", "routes_check",
            "validate_xodr"]
 
 log = logging.getLogger(__name__)
@@ -185,55 +187,118 @@ def _movement_roads(net: XodrNetwork, pairs: list[tuple[str, str]]):
     return [Movement(f"{u}->{v}", first.get(u, "?"), last.get(v, "?")) for u, v in pairs]
 
 
-def _qc_checks(path: Path, data: bytes, net: XodrNetwork, geometry: InterchangeGeometry | None,
-               options: ExportOptions | None, run_qc: bool, times: dict[str, float]
-               ) -> list[CheckResult]:
-    """The ``xsd`` and ``asam_qc`` rows, from one process of the checker's environment."""
-    vname = f"{net.version[0]}.{net.version[1]}"
-    try:
-        xsd = _xsd_path(path, net.version)
-    except FlyoverError as exc:
-        xsd, xsd_failed = None, exc.one_line()
-    xsd11 = [(xsd, path)] if xsd is not None and net.version >= (1, 8) else []
-    other = (other_rendition(data, net.version, geometry, options) if run_qc
-             else OtherVersion(None, None))
-    batch, error = None, ""
+@dataclass(frozen=True)
+class QCItem:
+    """One OpenDRIVE file for :func:`qc_checks`: its path, bytes, parsed network and, when
+    flyover wrote it, the geometry it was written from (for the other version's rendition)."""
+
+    path: Path
+    data: bytes
+    net: XodrNetwork
+    geometry: InterchangeGeometry | None = None
+
+
+def qc_checks(items: Sequence[QCItem], options: ExportOptions | None = None, run_qc: bool = True,
+              times: dict[str, float] | None = None) -> list[list[CheckResult]]:
+    """The ``xsd`` and ``asam_qc`` rows of every item, from *one* process of the checker's
+    environment (its start-up, ~2 s, is paid once for the whole batch).
+
+    Returns, per item in order, its ``xsd`` row and (with ``run_qc``) its ``asam_qc`` row.
+    When the checker's process cannot run at all, every item's checks that needed it fail
+    with that reason.
+    """
+    times = {} if times is None else times
+    plans = []  # per item: (xsd path or None, why not, index of the xsd11 job, other rendition, runs)
+    files: list[Path] = []
+    excluded_by: list[str | None] = []
+    xsd11: list[tuple[Path, Path]] = []
     with tempfile.TemporaryDirectory(prefix="flyover-qc-") as tmp:
-        files = [path] if run_qc else []
-        if other.data is not None:
-            files.append(Path(tmp) / f"rendition_{other.version[0]}_{other.version[1]}.xodr")
-            files[-1].write_bytes(other.data)
+        for i, it in enumerate(items):
+            try:
+                xsd, xsd_failed = _xsd_path(it.path, it.net.version), ""
+            except FlyoverError as exc:
+                xsd, xsd_failed = None, exc.one_line()
+            job = None
+            if xsd is not None and it.net.version >= (1, 8) and not run_qc:
+                job = len(xsd11)  # with the bundle, its own schema checker validates the file
+                xsd11.append((xsd, it.path))
+            other = (other_rendition(it.data, it.net.version, it.geometry, options) if run_qc
+                     else OtherVersion(None, None))
+            runs = []
+            if run_qc:
+                runs.append(len(files))
+                files.append(it.path)
+                excluded_by.append(None)
+                if other.data is not None:
+                    runs.append(len(files))
+                    files.append(Path(tmp) / f"{i}_rendition_{other.version[0]}_{other.version[1]}.xodr")
+                    files[-1].write_bytes(other.data)
+                    excluded_by.append(f"{it.net.version[0]}.{it.net.version[1]}.0")
+            plans.append((xsd, xsd_failed, job, other, runs))
+        batch, error = None, ""
         if files or xsd11:
             try:
-                batch = qc.run_qc_batch(files, xsd11=xsd11)
-                times["asam_qc"] = batch.seconds
+                batch = qc.run_qc_batch(files, xsd11=xsd11, excluded_by=excluded_by)
+                times["asam_qc"] = times.get("asam_qc", 0.0) + batch.seconds
             except FlyoverError as exc:
                 error = exc.one_line()
+    return [_qc_rows(it, plan, batch, error, run_qc) for it, plan in zip(items, plans)]
 
+
+#: the bundle's checker that validates a file against the ASAM XSD of its version
+SCHEMA_CHECKER = "check_asam_xodr_xml_valid_schema"
+
+
+def _bundle_schema_errors(it: QCItem, xsd: Path, run) -> list[str]:
+    """The file's XSD errors as the bundle's schema checker found them (the same ASAM XSD,
+    the same validator); validated here when that checker did not complete."""
+    outcome = next((o for o in run.outcomes if o.checker_id == SCHEMA_CHECKER), None)
+    if outcome is not None and outcome.status == "completed":
+        return [i.where for i in outcome.issues]
+    again = qc.run_qc_batch(xsd11=[(xsd, it.path)]).xsd11[0]
+    if again.error:
+        raise qc.QCError(f"XSD 1.1 validation failed to run: {again.error}", source=str(it.path))
+    return list(again.errors)
+
+
+def _qc_rows(it: QCItem, plan, batch, error: str, run_qc: bool) -> list[CheckResult]:
+    xsd, xsd_failed, job, other, runs = plan
+    vname = f"{it.net.version[0]}.{it.net.version[1]}"
     if xsd is None:
         errs = None
-    elif not xsd11:
-        errs = _xsd10_errors(path, xsd)
+    elif job is None and it.net.version >= (1, 8):  # the bundle's own schema check of the file
+        if batch is None:
+            errs, xsd_failed = None, error
+        elif batch.checker[runs[0]].error:
+            errs, xsd_failed = None, batch.checker[runs[0]].error
+        else:
+            try:
+                errs = _bundle_schema_errors(it, xsd, batch.checker[runs[0]])
+            except FlyoverError as exc:
+                errs, xsd_failed = None, exc.one_line()
+    elif job is None:
+        errs = _xsd10_errors(it.path, xsd)
     elif batch is None:
         errs, xsd_failed = None, error
-    elif batch.xsd11[0].error:
-        errs, xsd_failed = None, f"{path}: XSD 1.1 validation failed to run: {batch.xsd11[0].error}"
+    elif batch.xsd11[job].error:
+        errs, xsd_failed = None, f"{it.path}: XSD 1.1 validation failed to run: {batch.xsd11[job].error}"
     else:
-        errs = list(batch.xsd11[0].errors)
+        errs = list(batch.xsd11[job].errors)
     rows = [CheckResult("xsd", False, xsd_failed) if errs is None else CheckResult(
         "xsd", not errs, f"OpenDRIVE {vname}: " + ("valid" if not errs else
                                                    f"{len(errs)} errors; " + "; ".join(errs[:3])))]
     if not run_qc:
         return rows
+    checker = [batch.checker[k] for k in runs] if batch is not None else []
     if batch is None:
         rows.append(CheckResult("asam_qc", False, error))
-    elif failed := [r.error for r in batch.checker if r.error]:
+    elif failed := [r.error for r in checker if r.error]:
         rows.append(CheckResult("asam_qc", False, "; ".join(failed)))
     else:
-        rends = [qc.Rendition(vname, "the file", batch.checker[0].outcomes)]
+        rends = [qc.Rendition(vname, "the file", checker[0].outcomes)]
         if other.version is not None:
             rends.append(qc.Rendition(f"{other.version[0]}.{other.version[1]}",
-                                      "written from geometry.json", batch.checker[1].outcomes))
+                                      f"written from geometry.json, for the checkers {vname} excludes", checker[1].outcomes))
         rows.append(CheckResult("asam_qc", *qc.bundle_verdict(rends, [other.reason] if other.reason else [])))
     return rows
 
@@ -253,7 +318,6 @@ def validate_xodr(path: str | os.PathLike, *, geometry: InterchangeGeometry | No
     skipped silently.
     """
     from flyover.sumo.netconvert import run_netconvert  # noqa: PLC0415
-    from flyover.sumo.routes import check_routes, generic_routes  # noqa: PLC0415
 
     path = Path(path)
     times: dict[str, float] = {}
@@ -262,29 +326,47 @@ def validate_xodr(path: str | os.PathLike, *, geometry: InterchangeGeometry | No
         data = path.read_bytes()
     except FlyoverError as exc:
         return [CheckResult(c, False, exc.one_line()) for c in CHECKS], times, ()
-    results = _qc_checks(path, data, net, geometry, options, run_qc, times)
-    try:
-        ok, detail = check_continuity(net)
-        results.append(CheckResult("continuity", ok, detail))
-    except (FlyoverError, ValueError, ZeroDivisionError) as exc:
-        results.append(CheckResult("continuity", False, f"cannot evaluate: {exc}"))
+    results = qc_checks([QCItem(path, data, net, geometry)], options, run_qc, times)[0]
+    results.append(continuity_check(net))
     with tempfile.TemporaryDirectory(prefix="flyover-nc-") as tmp:
         out = Path(net_out) if net_out else Path(tmp) / "net.net.xml"
         nc = run_netconvert(path, out)
         times["netconvert"] = nc.seconds
-        detail = f"{len(nc.errors)} errors, {len(nc.warnings)} warnings"
-        if nc.errors:
-            detail += "; " + "; ".join(nc.errors[:3])
-        elif nc.warnings:
-            detail += "; e.g. " + nc.warnings[0]
-        results.append(CheckResult("netconvert", nc.ok, detail))
-        if not nc.ok:
-            results.append(CheckResult("routes", False, "no SUMO network"))
-        elif geometry is not None:
-            moves = _movement_roads(net, movements(geometry))
-            ok, detail, _ = check_routes(out, moves)
-            results.append(CheckResult("routes", ok and bool(moves), detail))
-        else:
-            ok, detail = generic_routes(out)
-            results.append(CheckResult("routes", ok, detail))
+        results.append(netconvert_check(nc))
+        results.append(routes_check(out if nc.ok else None, net, geometry))
     return results, times, nc.warnings
+
+
+def continuity_check(net: XodrNetwork) -> CheckResult:
+    """The ``continuity`` row (:mod:`flyover.opendrive.continuity`)."""
+    try:
+        ok, detail = check_continuity(net)
+        return CheckResult("continuity", ok, detail)
+    except (FlyoverError, ValueError, ZeroDivisionError) as exc:
+        return CheckResult("continuity", False, f"cannot evaluate: {exc}")
+
+
+def netconvert_check(nc) -> CheckResult:
+    """The ``netconvert`` row of a :class:`~flyover.sumo.netconvert.NetconvertResult`."""
+    detail = f"{len(nc.errors)} errors, {len(nc.warnings)} warnings"
+    if nc.errors:
+        detail += "; " + "; ".join(nc.errors[:3])
+    elif nc.warnings:
+        detail += "; e.g. " + nc.warnings[0]
+    return CheckResult("netconvert", nc.ok, detail)
+
+
+def routes_check(sumo_net: str | os.PathLike | None, net: XodrNetwork,
+                 geometry: InterchangeGeometry | None) -> CheckResult:
+    """The ``routes`` row: every movement of ``geometry`` routable in the SUMO network
+    ``sumo_net`` (made from ``net``), else every entry reaches some exit."""
+    from flyover.sumo.routes import check_routes, generic_routes  # noqa: PLC0415
+
+    if sumo_net is None:
+        return CheckResult("routes", False, "no SUMO network")
+    if geometry is not None:
+        moves = _movement_roads(net, movements(geometry))
+        ok, detail, _ = check_routes(sumo_net, moves)
+        return CheckResult("routes", ok and bool(moves), detail)
+    ok, detail = generic_routes(sumo_net)
+    return CheckResult("routes", ok, detail)

@@ -1,9 +1,11 @@
 # Shared helpers: config validation, city discovery, input functions,
 # wildcard constraints. No rule lives here.
 import json
+import sys
 from pathlib import Path
 
 from flyover.config import validate_config
+from flyover.summary import status_lines
 from flyover.topology.io import TOPOLOGY_SUFFIXES
 
 
@@ -11,8 +13,8 @@ validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 1
-EXPORT_VERSION = 1
-VALIDATION_VERSION = 3
+EXPORT_VERSION = 2  # 2: one job per class
+VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 
 
 wildcard_constraints:
@@ -29,6 +31,12 @@ def city_names():
 
 
 CITIES = city_names()
+
+
+def print_summary(log, failed=False):
+    """At the end of a run: per stage what was built, what failed, the tables to look in."""
+    head = "flyover: the run stopped on a failed job" if failed else "flyover: done"
+    print("\n".join([head, *status_lines("results")]), file=sys.stderr)
 
 
 def city_files(wildcards):
@@ -81,36 +89,20 @@ def class_coverage_rows(wildcards):
     return expand("results/coverage/{class_id}.parquet", class_id=class_ids())
 
 
-# -- export (step 5) --
+# -- per-class stages (geometry, export, validation, ...) --
 
-def exported_interchanges():
-    """(class_id, sample) of every interchange to export.
+def class_tables(stage):
+    """Input function: every class's table of ``stage`` (``results/{stage}/{class_id}.parquet``).
 
-    Uses the geometry stage's `geometry_interchanges()` when its rules define
-    it; otherwise the geometry.json files already on disk.
+    Each per-class stage writes one table per class as its declared output, with the
+    class's per-interchange files (results/interchanges/{class_id}/{sample}/) beside.
     """
-    if "geometry_interchanges" in globals():
-        return sorted(globals()["geometry_interchanges"]())
-    found = glob_wildcards("results/interchanges/{class_id}/{sample}/geometry.json")
-    return sorted(zip(found.class_id, found.sample))
 
+    def tables(wildcards):
+        return [f"results/{stage}/{c}.parquet" for c in class_ids()]
 
-def validation_tables(wildcards):
-    """Every interchange's rows of validation.parquet (made from geometry.json alone)."""
-    return [
-        f"results/interchanges/{c}/{s}/validation.parquet"
-        for c, s in exported_interchanges()
-    ]
-
-
-def export_outputs(wildcards):
-    """Every interchange's .xodr, SUMO network and plan (targets of rule all, not inputs
-    of the validation table: one failed export must not keep the table from being built)."""
-    return [
-        f"results/interchanges/{c}/{s}/{name}"
-        for c, s in exported_interchanges()
-        for name in ("interchange.xodr", "interchange.net.xml", "plan.png")
-    ]
+    tables.__name__ = f"class_tables_{stage}"
+    return tables
 
 
 # -- geometry stage (workflow/rules/geometry.smk) --------------------------------
@@ -120,25 +112,3 @@ def export_outputs(wildcards):
 # 11: an interchange with a ramp still in conflict is rebuilt with other seeds (rebuilds);
 #     a child on the side of its parent facing a road attaches where it has room
 GEOMETRY_VERSION = 11
-
-
-def _features_buildable(class_id):
-    """True when a rule makes (or has made) the class's feature sets."""
-    made = any("results/features/" in str(o) for r in workflow.rules for o in r.output)
-    return made or Path(f"results/features/{class_id}.parquet").exists()
-
-
-def geometry_features(wildcards):
-    """The feature sets of every class that has (or will have) them."""
-    return [f"results/features/{c}.parquet" for c in class_ids() if _features_buildable(c)]
-
-
-def geometry_interchanges():
-    """(class_id, sample) of every interchange to build (used by the export rules)."""
-    path = checkpoints.geometry_plan.get().output.plan
-    plan = json.loads(Path(path).read_text(encoding="utf-8"))
-    return [(c, int(s)) for c, samples in sorted(plan.items()) for s in samples]
-
-
-def geometry_tables(wildcards):
-    return [f"results/interchanges/{c}/{s}/geometry.parquet" for c, s in geometry_interchanges()]

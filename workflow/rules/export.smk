@@ -1,60 +1,47 @@
-# Step 5: geometry.json → OpenDRIVE (.xodr, plan.png) → SUMO network; validation table.
+# Step 5: geometry.json → OpenDRIVE (.xodr, plan.png) → SUMO network; validation.
 #
-# One interchange that cannot be written or converted must not cost the table: each
-# interchange's validation reads only its geometry.json and writes the .xodr itself (same
-# writer, same options, same bytes as export_xodr), so a failed export_xodr/export_sumo
-# job (reported, nothing half-written; the default profile keeps going) leaves a failed
-# `export`/`netconvert` row in results/validation.parquet instead of a missing table.
-# The files themselves are targets of rule all (export_outputs in common.smk).
+# One job per class and stage. export_class writes every interchange's interchange.xodr,
+# plan.png and interchange.net.xml (netconvert, once per interchange) beside its
+# geometry.json, and its `export` and `netconvert` rows; validate_class checks the files
+# export_class made (XSD and ASAM checker for the whole class in one process of the
+# checker's environment; continuity, routes on the SUMO network, clearance). An
+# interchange that cannot be written or converted is failed rows with the one-line error
+# naming the file and element, no half-written file, and the rest of its class is built.
 
 
-rule export_xodr:
-    """One interchange: geometry.json → interchange.xodr (OpenDRIVE 1.8) and plan.png."""
+rule export_class:
+    """One class: every geometry.json → interchange.xodr, plan.png, interchange.net.xml."""
     input:
-        geometry="results/interchanges/{class_id}/{sample}/geometry.json",
+        geometry="results/geometry/{class_id}.parquet",
     output:
-        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
-        plan="results/interchanges/{class_id}/{sample}/plan.png",
+        table="results/export/{class_id}.parquet",
     log:
-        "logs/export/{class_id}/{sample}/xodr.log",
+        "logs/export/{class_id}.log",
     conda:
         "../envs/flyover.yaml"
     params:
         version=EXPORT_VERSION,
         export=config["export"],
+        folder="results/interchanges/{class_id}",
+        name=class_name,
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=30,
     benchmark:
-        "logs/benchmarks/export_xodr/{class_id}/{sample}.tsv"
+        "logs/benchmarks/export/{class_id}.tsv"
     script:
-        "../scripts/export_xodr.py"
+        "../scripts/export_class.py"
 
 
-rule export_sumo:
-    """One interchange: interchange.xodr → interchange.net.xml (netconvert)."""
+rule validate_class:
+    """One class: XSD, ASAM checker (1.8 and 1.7), 3D continuity, netconvert, routes, clearance."""
     input:
-        xodr="results/interchanges/{class_id}/{sample}/interchange.xodr",
+        export="results/export/{class_id}.parquet",
     output:
-        net="results/interchanges/{class_id}/{sample}/interchange.net.xml",
+        table="results/validation/{class_id}.parquet",
     log:
-        "logs/export/{class_id}/{sample}/netconvert.log",
-    conda:
-        "../envs/flyover.yaml"
-    params:
-        version=EXPORT_VERSION,
-    benchmark:
-        "logs/benchmarks/export_sumo/{class_id}/{sample}.tsv"
-    script:
-        "../scripts/export_sumo.py"
-
-
-rule validate_interchange:
-    """One interchange: export, XSD, ASAM checker (1.8 and 1.7), 3D continuity, netconvert, routes,
-    clearance."""
-    input:
-        geometry="results/interchanges/{class_id}/{sample}/geometry.json",
-    output:
-        table="results/interchanges/{class_id}/{sample}/validation.parquet",
-    log:
-        "logs/export/{class_id}/{sample}/validation.log",
+        "logs/validation/{class_id}.log",
     conda:
         "../envs/flyover.yaml"
     params:
@@ -62,16 +49,22 @@ rule validate_interchange:
         export=config["export"],
         asam_qc=config["validation"]["asam_qc"],
         clearance_m=config["geometry"]["clearance_m"],
+        folder="results/interchanges/{class_id}",
+        name=class_name,
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=30,
     benchmark:
-        "logs/benchmarks/validate/{class_id}/{sample}.tsv"
+        "logs/benchmarks/validation/{class_id}.tsv"
     script:
-        "../scripts/export_validate.py"
+        "../scripts/validate_class.py"
 
 
 rule validation:
-    """All interchanges → results/validation.parquet."""
+    """Every class's rows → results/validation.parquet."""
     input:
-        tables=validation_tables,
+        class_tables("validation"),
     output:
         table="results/validation.parquet",
     log:
@@ -82,3 +75,10 @@ rule validation:
         version=VALIDATION_VERSION,
     script:
         "../scripts/export_validation_table.py"
+
+
+rule export:
+    """Target: the export stage (every interchange's files) and the validation table."""
+    input:
+        "results/validation.parquet",
+        class_tables("export"),

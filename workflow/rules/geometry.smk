@@ -1,55 +1,43 @@
 # Step 4: feature sets → concrete 3D interchanges (road layout + ramps fitted by DE).
 #
-# Fan-out: the samples of a class are known only once its feature sets exist, so
-# checkpoint geometry_plan lists them for every class (results/geometry/plan.json, a
-# cheap job); each interchange is then its own job (rule geometry) whose inputs are
-# only its class's topology and feature sets, so a new city or a changed class reruns
-# only its own interchanges (plus the plan and the aggregate table). Helpers: common.smk.
+# One job per class (process start-up and imports are paid once per class, not per
+# interchange): its declared output is the class's rows of geometry.parquet; beside it the
+# job writes results/interchanges/{class_id}/{sample}/geometry.json for every sample
+# (flyover.geometry.batch). A changed class or a new city reruns only its own classes
+# (plus the aggregate table). Helpers: common.smk.
 
 
-checkpoint geometry_plan:
-    """Every class's feature sets → class id → its sample numbers (the fan-out)."""
-    input:
-        geometry_features,
-    output:
-        plan="results/geometry/plan.json",
-    log:
-        "logs/geometry/plan.log",
-    conda:
-        "../envs/flyover.yaml"
-    params:
-        version=GEOMETRY_VERSION,
-    script:
-        "../scripts/geometry_plan.py"
-
-
-rule geometry:
-    """One feature set → geometry.json and its rows of geometry.parquet."""
+rule geometry_class:
+    """One class's feature sets → every sample's geometry.json and the class's geometry rows."""
     input:
         topology="results/classes/{class_id}/topology.graphml",
         features="results/features/{class_id}.parquet",
     output:
-        geometry="results/interchanges/{class_id}/{sample}/geometry.json",
-        table="results/interchanges/{class_id}/{sample}/geometry.parquet",
+        table="results/geometry/{class_id}.parquet",
     log:
-        "logs/geometry/{class_id}/{sample}.log",
+        "logs/geometry/{class_id}.log",
     conda:
         "../envs/flyover.yaml"
     params:
         version=GEOMETRY_VERSION,
         settings=config["geometry"],
         seed=config["seed"],
+        folder="results/interchanges/{class_id}",
+        name=class_name,
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=30,
     benchmark:
-        "logs/benchmarks/geometry/{class_id}/{sample}.tsv"
+        "logs/benchmarks/geometry/{class_id}.tsv"
     script:
-        "../scripts/geometry_interchange.py"
+        "../scripts/geometry_class.py"
 
 
 rule geometry_table:
-    """All interchanges → results/geometry.parquet."""
+    """Every class's rows → results/geometry.parquet."""
     input:
-        geometry_tables,
+        class_tables("geometry"),
     output:
         table="results/geometry.parquet",
     log:
@@ -60,3 +48,9 @@ rule geometry_table:
         version=GEOMETRY_VERSION,
     script:
         "../scripts/geometry_table.py"
+
+
+rule geometry:
+    """Target: the geometry stage only (every class's interchanges and geometry.parquet)."""
+    input:
+        "results/geometry.parquet",

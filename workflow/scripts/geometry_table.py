@@ -1,4 +1,4 @@
-"""Rule geometry_table: every interchange's rows → results/geometry.parquet."""
+"""Rule geometry_table: every class's rows → results/geometry.parquet."""
 import logging
 
 from flyover.geometry.tables import merge_tables
