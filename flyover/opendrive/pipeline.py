@@ -95,6 +95,8 @@ def clearance_check(geometry: str | os.PathLike, clearance_m: float = 5.5) -> Ch
         g = read_geometry(geometry)
     except FlyoverError as exc:
         return CheckResult("clearance", False, f"not run: {exc.one_line()}")
+    except FileNotFoundError:
+        return CheckResult("clearance", False, f"not run: {geometry}: no such file (not built)")
     found = same_level_conflicts(g, clearance_m=clearance_m)
     if not found:
         return CheckResult("clearance", True, f"{len(g.ramps)} ramps clear of every road and "

@@ -23,7 +23,6 @@ rule export_class:
         version=EXPORT_VERSION,
         export=config["export"],
         folder="results/interchanges/{class_id}",
-        name=class_name,
     threads: 1
     resources:
         mem_mb=1000,
@@ -50,7 +49,6 @@ rule validate_class:
         asam_qc=config["validation"]["asam_qc"],
         clearance_m=config["geometry"]["clearance_m"],
         folder="results/interchanges/{class_id}",
-        name=class_name,
     threads: 1
     resources:
         mem_mb=1500,

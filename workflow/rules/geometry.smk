@@ -23,7 +23,6 @@ rule geometry_class:
         settings=config["geometry"],
         seed=config["seed"],
         folder="results/interchanges/{class_id}",
-        name=class_name,
     threads: 1
     resources:
         mem_mb=1000,
