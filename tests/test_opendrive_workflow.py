@@ -51,7 +51,7 @@ def run(tmp_path_factory):
     (base / "7").mkdir()  # a sample the class no longer has: not the export stage's business
     rows = [{"class_id": CLASS, "sample": s, "ramp": "r1", "target_radius_m": 50.0,
              "target_slope_pct": 3.0, "min_radius_m": 50.0, "max_slope_pct": 3.0,
-             "length_m": 200.0, "ok": True, "evaluations": 1, "seconds": 0.0,
+             "length_m": 200.0, "ok": True, "evaluations": 1,
              "first_try_ok": True, "resamples": 0, "infeasible": None, "conflicts": 0,
              "first_target_radius_m": 50.0, "first_target_slope_pct": 3.0} for s in (0, 1)]
     rows += failed_rows(CLASS, 2, {"r1": RampFeatures(30.0, 5.0)}, "not built: r1: no way")

@@ -24,7 +24,7 @@ from pathlib import Path
 from flyover.errors import FlyoverError
 from flyover.geometry.layout import LayoutSettings
 from flyover.geometry.tables import (
-    GEOMETRY_SCHEMA, build_sample, domain_resampler, geometry_rows, read_feature_sets,
+    GEOMETRY_SCHEMA, GEOMETRY_TIMING_SCHEMA, build_sample, domain_resampler, geometry_rows, read_feature_sets,
     sample_seed,
 )
 from flyover.geometry.model import write_geometry
@@ -67,7 +67,8 @@ def remove_stale_samples(folder: str | os.PathLike, samples) -> list[str]:
 
 def build_class(topology: str | os.PathLike, features: str | os.PathLike,
                 table: str | os.PathLike, folder: str | os.PathLike, *, class_id: str,
-                seed: int, settings: LayoutSettings, name: str = "") -> list[dict]:
+                seed: int, settings: LayoutSettings, timing: str | os.PathLike | None = None,
+                name: str = "") -> list[dict]:
     """Build every feature set of one class; write each ``geometry.json`` and the class table.
 
     Parameters
@@ -78,6 +79,9 @@ def build_class(topology: str | os.PathLike, features: str | os.PathLike,
         Where the class's rows of ``geometry.parquet`` go (written last).
     folder
         ``results/interchanges/{class_id}``: ``{sample}/geometry.json`` is written in it.
+    timing
+        Where each ramp's fitting seconds go (:data:`GEOMETRY_TIMING_SCHEMA`), kept out of
+        ``table`` so that it is the same bytes in every run.
 
     Returns the rows written to ``table``.
     """
@@ -114,5 +118,7 @@ def build_class(topology: str | os.PathLike, features: str | os.PathLike,
         rows += geometry_rows(ic)
         log.info("%s: %d ramps, %.2f s CPU", path, len(ic.outcomes), time.process_time() - t0)
         progress.done()
+    if timing is not None:
+        write_parquet(rows, GEOMETRY_TIMING_SCHEMA, timing)
     write_parquet(rows, GEOMETRY_SCHEMA, table)
     return rows

@@ -26,7 +26,7 @@ from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
 from flyover.topology.tables import write_parquet
 
-__all__ = ["GEOMETRY_SCHEMA", "FeatureSet", "read_feature_sets", "sample_seed", "DomainResampler",
+__all__ = ["GEOMETRY_SCHEMA", "GEOMETRY_TIMING_SCHEMA", "FeatureSet", "read_feature_sets", "sample_seed", "DomainResampler",
            "domain_resampler",
            "build_sample", "geometry_rows", "write_sample", "merge_tables", "summary"]
 
@@ -37,12 +37,18 @@ GEOMETRY_SCHEMA = pa.schema([
     ("target_radius_m", pa.float64()), ("target_slope_pct", pa.float64()),
     ("min_radius_m", pa.float64()), ("max_slope_pct", pa.float64()),
     ("length_m", pa.float64()), ("ok", pa.bool_()), ("evaluations", pa.int64()),
-    ("seconds", pa.float64()),
     # additions beyond DESIGN.md (backwards compatible)
     ("first_try_ok", pa.bool_()), ("resamples", pa.int32()), ("infeasible", pa.string()),
     ("conflicts", pa.int32()),
     # the feature set's targets (target_* are the resampled ones when resamples > 0)
     ("first_target_radius_m", pa.float64()), ("first_target_slope_pct", pa.float64()),
+])
+
+#: how long each ramp's fit took (wall seconds of all its DE runs): the one figure that
+#: differs between runs, so it is a table of its own and geometry.parquet is byte-reproducible
+GEOMETRY_TIMING_SCHEMA = pa.schema([
+    ("class_id", pa.string()), ("sample", pa.int64()), ("ramp", pa.string()),
+    ("evaluations", pa.int64()), ("seconds", pa.float64()),
 ])
 
 FeatureSet = tuple[dict[str, int], dict[str, RampFeatures]]
@@ -145,7 +151,9 @@ def build_sample(topology: Topology, features: FeatureSet, *, class_id: str, sam
 
 
 def geometry_rows(ic: Interchange) -> list[dict]:
-    """Rows of ``geometry.parquet`` for one interchange (achieved values measured densely)."""
+    """Rows of ``geometry.parquet`` for one interchange (achieved values measured densely),
+    with each ramp's ``seconds`` too (:data:`GEOMETRY_TIMING_SCHEMA`; a writer with
+    :data:`GEOMETRY_SCHEMA` leaves it out)."""
     g = ic.geometry
     rows = []
     for o in sorted(ic.outcomes, key=lambda o: o.ramp):
@@ -165,19 +173,20 @@ def geometry_rows(ic: Interchange) -> list[dict]:
 
 
 def write_sample(ic: Interchange, geometry_path, table_path) -> None:
-    """Write ``geometry.json`` and the interchange's rows (both atomically)."""
+    """Write ``geometry.json`` and the interchange's rows (both atomically; no timings)."""
     write_geometry(ic.geometry, geometry_path)
-    # note: ``seconds`` is wall time, the one column that differs between runs
     write_parquet(geometry_rows(ic), GEOMETRY_SCHEMA, table_path)
 
 
-def merge_tables(paths: Iterable[str | os.PathLike], out: str | os.PathLike) -> int:
-    """Concatenate per-interchange tables into ``geometry.parquet``; returns the row count."""
+def merge_tables(paths: Iterable[str | os.PathLike], out: str | os.PathLike,
+                 schema: pa.Schema = GEOMETRY_SCHEMA) -> int:
+    """Concatenate per-class tables into ``geometry.parquet`` (or, with
+    :data:`GEOMETRY_TIMING_SCHEMA`, the timing table); returns the row count."""
     rows: list[dict] = []
     for p in paths:
-        rows += pq.read_table(p, schema=GEOMETRY_SCHEMA).to_pylist()
+        rows += pq.read_table(p, schema=schema).to_pylist()
     rows.sort(key=lambda r: (r["class_id"], r["sample"], r["ramp"]))
-    write_parquet(rows, GEOMETRY_SCHEMA, out)
+    write_parquet(rows, schema, out)
     return len(rows)
 
 

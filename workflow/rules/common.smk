@@ -111,4 +111,6 @@ def class_tables(stage):
 # 10: exact stretch tests in the conflict kernel, popsize 4, built C-D roads
 # 11: an interchange with a ramp still in conflict is rebuilt with other seeds (rebuilds);
 #     a child on the side of its parent facing a road attaches where it has room
-GEOMETRY_VERSION = 11
+# 12: one job per class; fitting seconds in results/geometry_timing/ (geometry.parquet
+#     is the same bytes in every run)
+GEOMETRY_VERSION = 12

@@ -14,6 +14,7 @@ rule geometry_class:
         features="results/features/{class_id}.parquet",
     output:
         table="results/geometry/{class_id}.parquet",
+        timing="results/geometry_timing/{class_id}.parquet",
     log:
         "logs/geometry/{class_id}.log",
     conda:
@@ -34,11 +35,13 @@ rule geometry_class:
 
 
 rule geometry_table:
-    """Every class's rows → results/geometry.parquet."""
+    """Every class's rows → results/geometry.parquet (and the fitting times beside it)."""
     input:
-        class_tables("geometry"),
+        tables=class_tables("geometry"),
+        timing=class_tables("geometry_timing"),
     output:
         table="results/geometry.parquet",
+        timing="results/geometry_timing.parquet",
     log:
         "logs/geometry.log",
     conda:

@@ -7,4 +7,5 @@ setup_logging(snakemake.log[0])
 build_class(snakemake.input.topology, snakemake.input.features, snakemake.output.table,
             snakemake.params.folder, class_id=snakemake.wildcards.class_id,
             seed=int(snakemake.params.seed),
-            settings=LayoutSettings.from_config(snakemake.params.settings))
+            settings=LayoutSettings.from_config(snakemake.params.settings),
+            timing=snakemake.output.timing)

@@ -1,0 +1,155 @@
+"""The main job, measured as a user runs it: from a fresh clone, `snakemake -j2`.
+
+Usage::
+
+    .venv/bin/python benchmarks/workflow.py                 # everything below, in a temp clone
+    .venv/bin/python benchmarks/workflow.py --keep DIR      # clone into DIR and keep it
+    .venv/bin/python benchmarks/workflow.py --before DIR    # also per-stage CPU of another run's
+                                                            # logs/benchmarks (e.g. the old layout)
+
+Steps (each printed with its wall time):
+
+1. ``git clone`` of this repository's HEAD (the working tree's uncommitted changes are not
+   in it) into a temporary folder; the clone uses this ``.venv`` and ``.venv-qc`` and
+   compiles its numba kernels first (``python -m flyover.warmup``, as ``./dev setup`` does);
+2. the main job: ``snakemake -j2`` (everything ``rule all`` asks);
+3. a no-op rerun (``snakemake -j2`` again);
+4. one class's feature sets changed (``touch results/features/{class}.parquet``): the job
+   list of a dry run, then the run;
+5. a new city with one interchange (a class the catalog does not have): the job list, then
+   the run.
+
+Then per stage the CPU seconds per interchange (from Snakemake's ``benchmark:`` files:
+``cpu_time`` of each job over the interchanges it handled) and the peak memory (``max_rss``)
+of any job.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+
+REPO = Path(__file__).resolve().parents[1]
+
+#: a city of one interchange in a class the catalog has not: expressway A ends at B, with
+#: the two directional ramps of a Y (A1 → B1 and B2 → A2)
+NEW_CITY = """\
+# A directional Y: expressway A ends where it joins B (two ramps); a class of its own.
+name: y_two_ramps
+expressways:
+  A: [A1, A2]
+  B: [B1, B2]
+ramps:
+  rIn:  {from: A1 straight, to: B1 right @0.60}
+  rOut: {from: B2 right @0.40, to: A2 straight}
+"""
+
+
+def _run(cmd: list[str], cwd: Path, log: Path) -> tuple[float, subprocess.CompletedProcess]:
+    env = dict(os.environ, PYTHONPATH=str(cwd))
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=env, check=False)
+    dt = time.perf_counter() - t0
+    log.write_text(proc.stdout + proc.stderr, encoding="utf-8")
+    return dt, proc
+
+
+def _jobs(dry_run_output: str) -> list[str]:
+    """The 'Job stats' table of a dry run as 'rule count' lines."""
+    m = re.search(r"Job stats:\n.*?\n-+\s+-+\n(.*?)\n\n", dry_run_output, re.S)
+    return [ln.strip() for ln in m.group(1).splitlines()] if m else ["(nothing to be done)"]
+
+
+def _stage_costs(clone: Path) -> dict[str, tuple[float, int, float, int]]:
+    """stage → (CPU s, interchanges, peak max_rss MB, jobs), from logs/benchmarks."""
+    per_class = {}
+    for p in (clone / "results" / "features").glob("c*.parquet"):
+        per_class[p.stem] = len(set(pq.read_table(p, columns=["sample"]).column("sample").to_pylist()))
+    out = {}
+    for stage_dir in sorted(p for p in (clone / "logs" / "benchmarks").iterdir() if p.is_dir()):
+        cpu, n, rss, jobs = 0.0, 0, 0.0, 0
+        for tsv in stage_dir.rglob("*.tsv"):
+            head, *rows = tsv.read_text().splitlines()
+            cols = head.split("\t")
+            for row in rows:
+                vals = dict(zip(cols, row.split("\t")))
+                cpu += float(vals.get("cpu_time", "nan"))
+                rss = max(rss, float(vals.get("max_rss", "0") or 0))
+                jobs += 1
+            cls = tsv.stem if tsv.stem in per_class else tsv.parent.name
+            n += per_class.get(cls, 1) if tsv.parent == stage_dir else 1
+        out[stage_dir.name] = (cpu, n, rss, jobs)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--keep", type=Path, help="clone into this folder and keep it")
+    ap.add_argument("--before", type=Path, help="a run folder whose logs/benchmarks to compare")
+    ap.add_argument("-j", "--jobs", type=int, default=2)
+    args = ap.parse_args(argv)
+
+    clone = args.keep or Path(tempfile.mkdtemp(prefix="flyover-bench-"))
+    if clone.exists() and any(clone.iterdir()):
+        sys.exit(f"{clone} is not empty")
+    subprocess.run(["git", "clone", "-q", str(REPO), str(clone)], check=True)
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone, capture_output=True,
+                          text=True, check=True).stdout.strip()
+    for venv in (".venv", ".venv-qc"):
+        (clone / venv).symlink_to(REPO / venv)
+    py, smk = str(REPO / ".venv" / "bin" / "python"), str(REPO / ".venv" / "bin" / "snakemake")
+    logs = clone / "bench-logs"
+    logs.mkdir()
+    print(f"clone of {head} in {clone}")
+
+    dt, _ = _run([py, "-m", "flyover.warmup"], clone, logs / "warmup.log")
+    print(f"set-up: numba kernels compiled in {dt:.0f} s")
+    dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "main.log")
+    print(f"main job (snakemake -j{args.jobs}): {dt:.0f} s wall = {dt / 60:.1f} min, exit {proc.returncode}")
+    summary = proc.stderr[proc.stderr.rfind("flyover: "):].splitlines()[:7]
+    print("\n".join("    " + ln for ln in summary))
+    dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "noop.log")
+    print(f"no-op rerun: {dt:.1f} s wall ({'nothing to be done' if 'Nothing to be done' in proc.stderr + proc.stdout else 'RAN JOBS'})")
+
+    klass = sorted((clone / "results" / "features").glob("c*.parquet"))[0]
+    klass.touch()
+    _, proc = _run([smk, "-n"], clone, logs / "touch-dry.log")
+    print(f"one class's feature sets changed ({klass.stem}); jobs:")
+    print("\n".join("    " + j for j in _jobs(proc.stdout + proc.stderr)))
+    dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "touch.log")
+    print(f"    run: {dt:.0f} s wall, exit {proc.returncode}")
+
+    city = clone / "config" / "cities" / "newcity"
+    city.mkdir()
+    (city / "y.yaml").write_text(NEW_CITY, encoding="utf-8")
+    _, proc = _run([smk, "-n"], clone, logs / "city-dry.log")
+    print("a new city with one interchange (a new class); jobs:")
+    print("\n".join("    " + j for j in _jobs(proc.stdout + proc.stderr)))
+    dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "city.log")
+    print(f"    run: {dt:.0f} s wall, exit {proc.returncode}")
+
+    print("\nper stage (the whole main job and its reruns), from logs/benchmarks:")
+    print(f"    {'stage':<12} {'jobs':>5} {'interchanges':>12} {'CPU s':>8} {'CPU s / interchange':>20} {'peak RSS MB':>12}")
+    for stage, (cpu, n, rss, jobs) in _stage_costs(clone).items():
+        print(f"    {stage:<12} {jobs:>5} {n:>12} {cpu:>8.0f} {cpu / max(n, 1):>20.3f} {rss:>12.0f}")
+    if args.before:
+        print(f"\nbefore ({args.before}):")
+        for stage, (cpu, n, rss, jobs) in _stage_costs(args.before).items():
+            print(f"    {stage:<12} {jobs:>5} {n:>12} {cpu:>8.0f} {cpu / max(n, 1):>20.3f} {rss:>12.0f}")
+    if not args.keep:
+        shutil.rmtree(clone, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
