@@ -29,7 +29,7 @@ from flyover.geometry.tables import (
 )
 from flyover.geometry.model import write_geometry
 from flyover.progress import Progress
-from flyover.topology.io import read_graphml
+from flyover.topology.io import read_graphml, remove_stale_temporaries
 from flyover.topology.tables import write_parquet
 
 __all__ = ["build_class", "failed_rows", "remove_stale_samples"]
@@ -90,6 +90,12 @@ def build_class(topology: str | os.PathLike, features: str | os.PathLike,
     folder = Path(folder)
     for stale in remove_stale_samples(folder, feature_sets):
         log.info("removed %s/%s: the class has no such sample any more", folder, stale)
+    # a killed run of this class (the first stage of its chain: no other job writes here now)
+    left = remove_stale_temporaries(folder)
+    for out in (table, timing) if timing is not None else (table,):
+        left += remove_stale_temporaries(Path(out).parent, Path(out).name)
+    for path in left:
+        log.info("removed %s: left by a killed run", path)
     progress = Progress("geometry", f"{class_id} {name}".strip(), len(feature_sets))
     rows: list[dict] = []
     for sample, fs in sorted(feature_sets.items()):

@@ -207,7 +207,10 @@ def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
     from flyover.topology.io import atomic_write  # noqa: PLC0415
     from flyover.topology.tables import write_parquet  # noqa: PLC0415
 
+    from flyover.topology.io import remove_stale_temporaries  # noqa: PLC0415
+
     folder = Path(folder)
+    remove_stale_temporaries(Path(table).parent, Path(table).name)
     samples = class_samples(geometry_table)
     progress = Progress("export", f"{class_id} {name}".strip(), len(samples))
     rows: list[dict] = []
@@ -216,6 +219,7 @@ def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
         geometry = here / "geometry.json"
         for f in EXPORT_FILES:
             (here / f).unlink(missing_ok=True)
+            remove_stale_temporaries(here, f)  # of a killed run
         if not_built:
             results = [CheckResult("export", False, f"{geometry}: {not_built}"),
                        CheckResult("netconvert", False, "not run: no OpenDRIVE file (export failed)")]
@@ -272,7 +276,10 @@ def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
     from flyover.progress import Progress  # noqa: PLC0415
     from flyover.topology.tables import write_parquet  # noqa: PLC0415
 
+    from flyover.topology.io import remove_stale_temporaries  # noqa: PLC0415
+
     folder = Path(folder)
+    remove_stale_temporaries(Path(table).parent, Path(table).name)
     exported: dict[int, dict[str, CheckResult]] = {}
     for r in pq.read_table(str(export_table), schema=VALIDATION_SCHEMA).to_pylist():
         exported.setdefault(r["sample"], {})[r["check"]] = CheckResult(r["check"], r["ok"], r["detail"])

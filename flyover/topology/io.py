@@ -40,6 +40,7 @@ from flyover.topology.names import check_name
 
 __all__ = [
     "TOPOLOGY_SUFFIXES",
+    "remove_stale_temporaries",
     "read_graphml",
     "write_graphml",
     "graphml_bytes",
@@ -64,6 +65,20 @@ def file_mode() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return 0o666 & ~mask
+
+
+def remove_stale_temporaries(folder: str | os.PathLike, name: str = "*") -> list[Path]:
+    """Remove what atomic writes killed before their rename left in ``folder`` (recursively):
+    hidden files ``.{name}.*.tmp`` (or ``….tmp.net.xml``, netconvert's). ``name`` (a glob)
+    limits it to the temporaries of one file name. Returns what was removed."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    stale = [p for p in folder.rglob(f".{name}.*.tmp*") if p.is_file()
+             and (p.name.endswith(".tmp") or p.name.endswith(".tmp.net.xml"))]
+    for p in stale:
+        p.unlink(missing_ok=True)
+    return stale
 
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:

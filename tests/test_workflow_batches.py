@@ -1,0 +1,177 @@
+"""The main job's per-class batches, run for real on a small city of two classes: exact
+incrementality, an interrupted run that resumes, and the same bytes as an uninterrupted run."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from flyover.opendrive.reader import read_xodr
+
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile")]
+
+#: a directional Y: expressway A ends where it joins B (a class the catalog does not have)
+Y = """\
+name: y
+expressways: {A: [A1, A2], B: [B1, B2]}
+ramps:
+  rIn:  {from: A1 straight, to: B1 right @0.60}
+  rOut: {from: B2 right @0.40, to: A2 straight}
+"""
+#: files whose bytes may differ between two runs of the same config (fitting times)
+NOT_REPRODUCIBLE = ("results/geometry_timing.parquet", "results/geometry_timing/")
+
+
+def _workdir(root: Path) -> Path:
+    """A workflow folder: the repository's config, a city of two interchanges, t = 1."""
+    shutil.copytree(REPO / "config", root / "config", symlinks=True)
+    city = root / "config" / "cities" / "small"
+    city.mkdir()
+    (city / "y.yaml").write_text(Y, encoding="utf-8")
+    shutil.copy(REPO / "flyover" / "catalog" / "trumpet.yaml", city / "trumpet.yaml")
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text(encoding="utf-8"))
+    cfg["cities"] = ["small"]
+    cfg["sampling"]["t"] = 1
+    (root / "config" / "config.yaml").write_text(yaml.safe_dump(cfg), encoding="utf-8")
+    return root
+
+
+def snakemake(wd: Path, *args: str, check: bool = False) -> subprocess.CompletedProcess:
+    proc = subprocess.run([*SNAKEMAKE, "-d", str(wd), *args], cwd=wd, capture_output=True,
+                          text=True, check=False)
+    if check and proc.returncode != 0:
+        raise AssertionError(proc.stderr[-4000:])
+    return proc
+
+
+def _files(wd: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(wd)): p.read_bytes()
+            for p in sorted((wd / "results").rglob("*")) if p.is_file()}
+
+
+def _jobs(log: str) -> list[tuple[str, str]]:
+    """(rule, its wildcards, e.g. ``class_id=c0123456789``) of every job a log lists."""
+    jobs: list[list[str]] = []
+    for line in log.splitlines():
+        s = line.strip()
+        if s.startswith(("rule ", "localrule ", "checkpoint ", "localcheckpoint ")):
+            jobs.append([s.split()[1].rstrip(":"), ""])
+        elif s.startswith("wildcards:") and jobs:
+            jobs[-1][1] = s.removeprefix("wildcards:").strip()
+    return [tuple(j) for j in jobs]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    wd = _workdir(tmp_path_factory.mktemp("reference"))
+    snakemake(wd, "-j2", check=True)
+    return wd
+
+
+def test_the_main_job_builds_every_interchange_of_every_class(reference):
+    classes = pq.read_table(reference / "results" / "classes.parquet").to_pylist()
+    assert len({r["class_id"] for r in classes}) == 2
+    rows = pq.read_table(reference / "results" / "validation.parquet").to_pylist()
+    built = {(r["class_id"], r["sample"]) for r in rows}
+    features = {(c, s) for p in (reference / "results" / "features").glob("c*.parquet")
+                for c, s in zip(*pq.read_table(p, columns=["class_id", "sample"]).to_pydict().values())}
+    assert built == features and len(built) >= 16
+    for c, s in built:
+        folder = reference / "results" / "interchanges" / c / str(s)
+        assert sorted(p.name for p in folder.iterdir()) == [
+            "geometry.json", "interchange.net.xml", "interchange.xodr", "plan.png"]
+    assert all(r["ok"] for r in rows), [r for r in rows if not r["ok"]][:3]
+
+
+def test_a_rerun_has_nothing_to_do(reference):
+    dry = snakemake(reference, "-n")
+    assert "Nothing to be done" in dry.stdout + dry.stderr
+
+
+def test_changed_features_of_one_class_rerun_that_class_only(reference):
+    features = sorted((reference / "results" / "features").glob("c*.parquet"))
+    changed, other = features[0].stem, features[1].stem
+    os.utime(features[0])
+    jobs = _jobs(snakemake(reference, "-n").stdout)
+    mine = f"class_id={changed}"
+    assert {("geometry_class", mine), ("export_class", mine), ("validate_class", mine)} <= set(jobs)
+    assert not any(other in w for _, w in jobs), jobs
+    assert not any(r in ("sample_class", "import_city", "classify") for r, _ in jobs), jobs
+    snakemake(reference, "-j2", check=True)
+
+
+def test_a_new_city_runs_only_its_own_class_and_the_aggregates(reference, tmp_path):
+    wd = tmp_path / "grown"
+    shutil.copytree(reference, wd, symlinks=True)
+    city = wd / "config" / "cities" / "another"
+    city.mkdir()
+    (city / "y_again.yaml").write_text(Y.replace("name: y", "name: y_again"), encoding="utf-8")
+    shutil.copy(REPO / "flyover" / "catalog" / "j1.yaml", city / "j1.yaml")
+    cfg = yaml.safe_load((wd / "config" / "config.yaml").read_text(encoding="utf-8"))
+    cfg["cities"] = ["small", "another"]
+    (wd / "config" / "config.yaml").write_text(yaml.safe_dump(cfg), encoding="utf-8")
+    jobs = _jobs(snakemake(wd, "-n").stdout)
+    assert ("import_city", "city=another") in jobs and ("import_city", "city=small") not in jobs
+    # the classes are known only once classified (a checkpoint): a dry run lists no class job
+    assert not any(r in ("geometry_class", "export_class", "validate_class") for r, _ in jobs)
+    done = snakemake(wd, "-j2", check=True)
+    per_class = [r for r, _ in _jobs(done.stderr) if r in ("geometry_class", "export_class")]
+    assert per_class.count("geometry_class") == 1 and per_class.count("export_class") == 1
+
+
+def _wait_for(pred, timeout_s: float = 300.0) -> None:
+    t0 = time.monotonic()
+    while not pred():
+        if time.monotonic() - t0 > timeout_s:
+            raise AssertionError("timed out")
+        time.sleep(0.2)
+
+
+def _job_pids(script: str) -> list[int]:
+    out = subprocess.run(["pgrep", "-f", script], capture_output=True, text=True, check=False)
+    return [int(p) for p in out.stdout.split()]
+
+
+def test_an_interrupted_run_resumes_and_gives_the_same_bytes(reference, tmp_path):
+    wd = _workdir(tmp_path)
+    # 1. Ctrl-C while the geometry of the classes is being built
+    run = subprocess.Popen([*SNAKEMAKE, "-d", str(wd), "-j2"], cwd=wd, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, start_new_session=True)
+    geometry = wd / "results" / "interchanges"
+    _wait_for(lambda: any(geometry.rglob("geometry.json")))
+    os.killpg(run.pid, signal.SIGINT)
+    assert run.wait(timeout=120) != 0
+    # 2. a running validation job killed outright
+    run = subprocess.Popen([*SNAKEMAKE, "-d", str(wd), "-j2"], cwd=wd, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, start_new_session=True)
+    _wait_for(lambda: bool(_job_pids(f"{wd}/.snakemake/scripts/.*validate_class")) or
+              run.poll() is not None)
+    for pid in _job_pids(f"{wd}/.snakemake/scripts/.*validate_class"):
+        os.kill(pid, signal.SIGKILL)
+    run.wait(timeout=300)
+    # 3. resumed as a user would: run again
+    snakemake(wd, "-j2", check=True)
+    dry = snakemake(wd, "-n")
+    assert "Nothing to be done" in dry.stdout + dry.stderr
+    got, want = _files(wd), _files(reference)
+    assert not [p for p in got if Path(p).name.startswith(".") or p.endswith(".tmp")]
+    assert sorted(got) == sorted(want)
+    differ = [p for p in got if got[p] != want[p] and not p.startswith(NOT_REPRODUCIBLE)]
+    assert not differ, differ[:5]
+    for p in got:
+        if p.endswith(".parquet"):
+            pq.read_table(wd / p)
+        elif p.endswith(".xodr"):
+            read_xodr(wd / p)
