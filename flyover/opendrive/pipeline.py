@@ -261,30 +261,46 @@ def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
 def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
                    table: str | os.PathLike, *, class_id: str,
                    options: ExportOptions | None = None, run_qc: bool = True,
-                   clearance_m: float = 5.5, name: str = "") -> list[dict]:
+                   clearance_m: float = 5.5, name: str = "", chunk: int = 32) -> list[dict]:
     """Validate every interchange of one class: its rows of ``validation.parquet`` → ``table``.
 
     Reads the files the export stage wrote (``export_class``) and takes over its
     ``export`` and ``netconvert`` rows; the XSD and ASAM checks of the whole class
     (both renditions of every interchange) run in one process of the checker's
-    environment; continuity, routes (on the SUMO network the export stage made) and
-    clearance per interchange. Checks that need a file the export could not make
+    environment per ``chunk`` interchanges (its start-up, ~1 s, is paid once per chunk;
+    progress is reported after each); continuity, routes (on the SUMO network the export
+    stage made) and clearance per interchange. Checks that need a file the export could not make
     fail as ``not run``.
     """
-    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
-    from flyover.opendrive.validate import QCItem, continuity_check, qc_checks, routes_check  # noqa: PLC0415
     from flyover.progress import Progress  # noqa: PLC0415
-    from flyover.topology.tables import write_parquet  # noqa: PLC0415
-
     from flyover.topology.io import remove_stale_temporaries  # noqa: PLC0415
+    from flyover.topology.tables import write_parquet  # noqa: PLC0415
 
     folder = Path(folder)
     remove_stale_temporaries(Path(table).parent, Path(table).name)
     exported: dict[int, dict[str, CheckResult]] = {}
     for r in pq.read_table(str(export_table), schema=VALIDATION_SCHEMA).to_pylist():
         exported.setdefault(r["sample"], {})[r["check"]] = CheckResult(r["check"], r["ok"], r["detail"])
+    progress = Progress("validation", f"{class_id} {name}".strip(), len(exported))
+    rows: list[dict] = []
+    samples = sorted(exported)
+    for k in range(0, len(samples), chunk):
+        rows += _validate_chunk({s: exported[s] for s in samples[k:k + chunk]}, folder,
+                                class_id=class_id, options=options, run_qc=run_qc,
+                                clearance_m=clearance_m, progress=progress)
+    write_parquet(rows, VALIDATION_SCHEMA, table)
+    return rows
+
+
+def _validate_chunk(exported: dict[int, dict[str, CheckResult]], folder: Path, *, class_id: str,
+                    options: ExportOptions | None, run_qc: bool, clearance_m: float,
+                    progress) -> list[dict]:
+    """The rows of some interchanges of one class, their XSD and ASAM checks in one process."""
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.validate import QCItem, continuity_check, qc_checks, routes_check  # noqa: PLC0415
+
     items, item_samples, parsed = [], [], {}
-    for sample, done in sorted(exported.items()):
+    for sample, done in exported.items():
         here = folder / str(sample)
         if not done["export"].ok:
             continue
@@ -298,10 +314,9 @@ def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
             parsed[sample] = exc.one_line()
     times: dict[str, float] = {}
     checked = dict(zip(item_samples, qc_checks(items, options, run_qc, times)))
-    log.info("ASAM checker and XSD 1.1 for %d interchanges: %.1f s", len(items), times.get("asam_qc", 0.0))
-    progress = Progress("validation", f"{class_id} {name}".strip(), len(exported))
+    log.info("ASAM checker and XSD for %d interchanges: %.1f s", len(items), times.get("asam_qc", 0.0))
     rows: list[dict] = []
-    for sample, done in sorted(exported.items()):
+    for sample, done in exported.items():
         here = folder / str(sample)
         if sample in checked:
             g, net = parsed[sample]
@@ -321,5 +336,4 @@ def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
                                                 "ok" if r.ok else "FAILED", r.detail)
         rows += [_row(class_id, sample, r) for r in results]
         progress.done(ok=all(r.ok for r in results))
-    write_parquet(rows, VALIDATION_SCHEMA, table)
     return rows
