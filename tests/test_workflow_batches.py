@@ -104,7 +104,8 @@ def test_changed_features_of_one_class_rerun_that_class_only(reference):
     features = sorted((reference / "results" / "features").glob("c*.parquet"))
     changed, other = features[0].stem, features[1].stem
     os.utime(features[0])
-    jobs = _jobs(snakemake(reference, "-n").stdout)
+    dry = snakemake(reference, "-n")
+    jobs = _jobs(dry.stdout + dry.stderr)
     mine = f"class_id={changed}"
     assert {("geometry_class", mine), ("export_class", mine), ("validate_class", mine)} <= set(jobs)
     assert not any(other in w for _, w in jobs), jobs
@@ -122,7 +123,8 @@ def test_a_new_city_runs_only_its_own_class_and_the_aggregates(reference, tmp_pa
     cfg = yaml.safe_load((wd / "config" / "config.yaml").read_text(encoding="utf-8"))
     cfg["cities"] = ["small", "another"]
     (wd / "config" / "config.yaml").write_text(yaml.safe_dump(cfg), encoding="utf-8")
-    jobs = _jobs(snakemake(wd, "-n").stdout)
+    dry = snakemake(wd, "-n")
+    jobs = _jobs(dry.stdout + dry.stderr)
     assert ("import_city", "city=another") in jobs and ("import_city", "city=small") not in jobs
     # the classes are known only once classified (a checkpoint): a dry run lists no class job
     assert not any(r in ("geometry_class", "export_class", "validate_class") for r, _ in jobs)
