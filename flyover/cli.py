@@ -25,6 +25,7 @@ STAGE_CLIS = (
     "flyover.sampling.cli",
     "flyover.geometry.cli",
     "flyover.opendrive.cli",
+    "flyover.traffic.cli",
 )
 
 
