@@ -26,6 +26,8 @@ STAGE_CLIS = (
     "flyover.geometry.cli",
     "flyover.opendrive.cli",
     "flyover.traffic.cli",
+    "flyover.plugins.cli",
+    "flyover.analytics.cli",
 )
 
 

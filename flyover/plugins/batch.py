@@ -190,6 +190,8 @@ def run_plugins_on_class(geometry_paths: Iterable[str | os.PathLike],
             load_error = None
         except FlyoverError as exc:
             geometry, load_error = None, exc.one_line()
+        except OSError as exc:
+            geometry, load_error = None, f"cannot read geometry.json: {exc.strerror or exc}"
         seen.setdefault(class_id, set()).add(sample)
         for p in loaded:
             t0 = time.process_time()

@@ -148,68 +148,65 @@ class LatticePlanner:
         self.tau = np.linspace(1.0 / _SAMPLES, 1.0, _SAMPLES)
 
     def _at(self, s: np.ndarray, col: np.ndarray) -> np.ndarray:
-        r = self.route
-        i = np.clip((s - r.s[0]) / r.spacing_m, 0, len(r.s) - 1.000001)
-        j = i.astype(int)
-        f = i - j
-        return col[j] * (1 - f) + col[j + 1] * f
+        return np.interp(s, self.route.s, col)
 
     def plan(self, s0: float, d0: float, d1: float, d2: float, v0: float, a0: float) -> Plan:
         """The best trajectory from station ``s0`` with lateral state ``(d0, d', d'')``
         and longitudinal state ``(v0, a0)``."""
         p = self.p
         v0 = max(v0, 0.1)
-        # end speeds: fractions of the preferred speed, the envelope ahead, the current speed
         T = self.horizons
-        ahead = self._at(s0 + v0 * T, self.env)
+        n_o, n_t = len(self.offsets), len(T)
+        # longitudinal candidates: end speeds (fractions of the preferred speed, the
+        # envelope ahead, the current speed) x horizons -> quartics, sampled in time
+        ahead = np.interp(s0 + v0 * T, self.route.s, self.env)
         vs = np.concatenate([np.broadcast_to(p.preferred_speed_mps * self.fractions[:, None],
-                                             (len(self.fractions), len(T))),
-                             ahead[None, :], np.full((1, len(T)), v0)])
-        vs = np.clip(vs, p.min_speed_mps, None)
-        n_v = vs.shape[0]
-        # grid: offsets x speeds x horizons
-        off = self.offsets[:, None, None]
-        v_end = np.broadcast_to(vs[None, :, :], (len(self.offsets), n_v, len(T))).ravel()
-        Tg = np.broadcast_to(T[None, None, :], (len(self.offsets), n_v, len(T))).ravel()
-        og = np.broadcast_to(off, (len(self.offsets), n_v, len(T))).ravel()
-        c = quartic_speed(v0, a0, v_end, Tg)                       # (C, 4)
-        length = c[:, 0] * Tg + c[:, 1] * Tg**2 + c[:, 2] * Tg**3 + c[:, 3] * Tg**4
-        ok_len = length > 1.0
-        length = np.maximum(length, 1.0)
-        d_end = self._at(s0 + length, self.route.d_pref) + og
-        a = quintic(d0, d1, d2, d_end, length)                     # (C, 6)
-        t = Tg[:, None] * self.tau[None, :]                        # (C, M)
+                                             (len(self.fractions), n_t)),
+                             ahead[None, :], np.full((1, n_t), v0)])
+        vs = np.maximum(vs, p.min_speed_mps).ravel()
+        Tl = np.broadcast_to(T, (len(vs) // n_t, n_t)).ravel()
+        c = quartic_speed(v0, a0, vs, Tl)                          # (L, 4)
+        t = Tl[:, None] * self.tau[None, :]                        # (L, M)
         c1, c2, c3, c4 = (c[:, i:i + 1] for i in range(4))
-        sig = c1 * t + c2 * t**2 + c3 * t**3 + c4 * t**4
-        v = c1 + 2 * c2 * t + 3 * c3 * t**2 + 4 * c4 * t**3
-        acc = 2 * c2 + 6 * c3 * t + 12 * c4 * t**2
+        sig = t * (c1 + t * (c2 + t * (c3 + t * c4)))
+        v = c1 + t * (2 * c2 + t * (3 * c3 + t * 4 * c4))
+        acc = 2 * c2 + t * (6 * c3 + t * 12 * c4)
         jerk = 6 * c3 + 24 * c4 * t
-        a0_, a1_, a2_, a3_, a4_, a5_ = (a[:, i:i + 1] for i in range(6))
+        length = sig[:, -1]
+        st = s0 + sig
+        kap = np.interp(st, self.route.s, self.route.curvature)
+        env = np.interp(st, self.route.s, self.env)
+        dpref = np.interp(st, self.route.s, self.route.d_pref)
+        lon_viol = (np.maximum(acc - p.max_accel_mps2 * 1.05, 0).max(1)
+                    + np.maximum(-acc - p.max_decel_mps2 * 1.05, 0).max(1)
+                    + np.maximum(v - env - 0.3, 0).max(1) + np.maximum(-v, 0).max(1)
+                    + (length <= 1.0) * 10.0)
+        lon_cost = (p.weight_longitudinal_jerk * (jerk**2).mean(1)
+                    + p.weight_speed * ((v - p.preferred_speed_mps) ** 2).mean(1))
+        length = np.maximum(length, 1.0)
+        # lateral candidates: every offset for every longitudinal one -> (O, L, ...)
+        d_end = np.interp(s0 + length, self.route.s, self.route.d_pref)[None, :] \
+            + self.offsets[:, None]
+        a = quintic(d0, d1, d2, d_end, length[None, :])            # (O, L, 6)
+        a0_, a1_, a2_, a3_, a4_, a5_ = (a[..., i:i + 1] for i in range(6))
         d = a0_ + sig * (a1_ + sig * (a2_ + sig * (a3_ + sig * (a4_ + sig * a5_))))
         dd2 = 2 * a2_ + sig * (6 * a3_ + sig * (12 * a4_ + sig * 20 * a5_))
         dd3 = 6 * a3_ + sig * (24 * a4_ + sig * 60 * a5_)
-        st = s0 + sig
-        kap = self._at(st, self.route.curvature)
         k_path = kap / (1.0 - kap * d) + dd2
         a_lat = v**2 * k_path
-        env = self._at(st, self.env)
-        viol = (np.maximum(np.abs(a_lat) - p.max_lateral_accel_mps2, 0).max(1)
+        viol = (np.maximum(np.abs(a_lat).max(-1) - p.max_lateral_accel_mps2, 0)
                 / p.max_lateral_accel_mps2
-                + np.maximum(np.abs(k_path) - self.k_max, 0).max(1) / self.k_max
-                + np.maximum(acc - p.max_accel_mps2 * 1.05, 0).max(1)
-                + np.maximum(-acc - p.max_decel_mps2 * 1.05, 0).max(1)
-                + np.maximum(v - env - 0.3, 0).max(1)
-                + np.maximum(-v, 0).max(1)
-                + (~ok_len) * 10.0)
-        cost = (p.weight_deviation * ((d - self._at(st, self.route.d_pref)) ** 2).mean(1)
-                + p.weight_lateral_jerk * ((v**3 * dd3) ** 2).mean(1)
-                + p.weight_longitudinal_jerk * (jerk**2).mean(1)
-                + p.weight_speed * ((v - p.preferred_speed_mps) ** 2).mean(1))
+                + np.maximum(np.abs(k_path).max(-1) - self.k_max, 0) / self.k_max
+                + lon_viol[None, :]).ravel()
+        cost = (p.weight_deviation * ((d - dpref) ** 2).mean(-1)
+                + p.weight_lateral_jerk * ((v**3 * dd3) ** 2).mean(-1)
+                + lon_cost[None, :]).ravel()
         feasible = viol <= 0.0
         if feasible.any():
             best = int(np.argmin(np.where(feasible, cost, np.inf)))
         else:
             best = int(np.argmin(viol + 1e-6 * cost))
-        return Plan(float(s0), float(length[best]), a[best], c[best], float(Tg[best]),
+        o, l_ = divmod(best, len(length))
+        return Plan(float(s0), float(length[l_]), a[o, l_], c[l_], float(Tl[l_]),
                     bool(feasible[best]), float(viol[best]),
-                    float(np.abs(a_lat[best]).max()))
+                    float(np.abs(a_lat[o, l_]).max()))
