@@ -136,7 +136,8 @@ def read_graphml(path: str | os.PathLike, name: str | None = None) -> Topology:
     src = str(path)
     try:
         g = nx.read_graphml(path, force_multigraph=True)
-    except (ParseError, nx.NetworkXError, ValueError, KeyError) as exc:
+    except (ParseError, nx.NetworkXError, ValueError, KeyError, LookupError) as exc:
+        # LookupError: an XML declaration naming an unknown encoding
         raise InputFormatError(f"not readable as GraphML: {_first_line(exc)}", source=src) from None
     name = check_name(name or g.graph.get("name") or Path(path).stem, source=src)
     node_keys = set().union(*(d.keys() for _, d in g.nodes(data=True))) if g.nodes else set()

@@ -1,0 +1,206 @@
+"""Fuzzing the YAML spec reader and the city import of YAML specs (issue 19).
+
+Inputs are the catalog's specs (``flyover/catalog/*.yaml``) mutated as data
+(values swapped for hostile ones, keys dropped or added, names that are paths)
+and as text (lines dropped, duplicated, swapped; YAML tricks pasted in). Each
+either loads or raises a FlyoverError naming the file; the city import writes
+nothing outside its output folder. Settings and the long run: ``tests/fuzz_support.py``.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+import yaml
+from hypothesis import given
+from hypothesis import strategies as st
+
+from flyover.errors import InputFormatError, UnsafeNameError
+from flyover.topology.catalog import catalog_dir
+from flyover.topology.io import read_topologies, read_yaml_spec
+from tests.fuzz_support import (
+    FUZZ,
+    HOSTILE_WORDS,
+    assert_names_file,
+    hostile_text,
+    import_stays_inside,
+    loads_or_names_file,
+    sandbox,
+    write_text,
+)
+
+CATALOG = sorted(catalog_dir().glob("*.yaml"))
+TEXTS = [p.read_text(encoding="utf-8") for p in CATALOG]
+DOCS = [yaml.safe_load(t) for t in TEXTS]
+WORDS = ["name", "expressways", "lanes", "ramps", "from", "to", "design", "source", "right", "left",
+         "straight", "A1", "A2", "B1", "r1", "A1 right", "r1 left @0.5", "B2 straight", "A1 up",
+         "A1 right @2", "A1 right @nan", "A1 right @", "@", "A1  right  @ 0.3"]
+
+#: YAML that has broken loaders: aliases, tags, dates, depth
+YAML_SNIPPETS = [
+    "a: &a [*a]\n", "x: &x {k: *x}\n",
+    "l0: &l0 [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+        f"l{i}: &l{i} [*l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}]\n"
+        for i in range(1, 9)),
+    "!!python/object/apply:os.system ['touch pwned']\n", "x: !!python/name:os.system\n",
+    "d: 2023-13-45\n", "d: 2023-02-30 25:61:61\n", "n: !!int x\n", "f: !!float abc\n",
+    "b: !!binary '@@@'\n", "t: !!timestamp 2020-99-99\n", "s: !!set {a, b}\n", "? [a, b]\n: c\n",
+    "[" * 3000 + "]" * 3000 + "\n", "{a: " * 3000 + "1" + "}" * 3000 + "\n",
+    "<<: *undefined\n", "%YAML 1.1\n---\n", "---\n---\n", "\t- x\n", "key: 'unterminated\n",
+    "big: " + "9" * 5000 + "\n", "\x00\n", "\ufeffname: x\n", "name: \udcff\n",
+]
+
+json_like = st.recursive(
+    st.none() | st.booleans() | st.integers(-10**20, 10**20) | st.floats() | hostile_text(WORDS),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(hostile_text(WORDS), inner, max_size=4),
+    max_leaves=12,
+)
+
+
+def _paths(doc, prefix=()):
+    """Every (path, value) in a nested mapping/list."""
+    yield prefix, doc
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield from _paths(v, prefix + (k,))
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc):
+            yield from _paths(v, prefix + (i,))
+
+
+@st.composite
+def mutated_spec_doc(draw):
+    """A catalog spec with 1-4 data mutations."""
+    doc = copy.deepcopy(draw(st.sampled_from(DOCS)))
+    for _ in range(draw(st.integers(1, 4))):
+        paths = [p for p, _ in _paths(doc) if p]
+        if not paths:
+            break
+        path = draw(st.sampled_from(paths))
+        parent = doc
+        for k in path[:-1]:
+            parent = parent[k]
+        op = draw(st.sampled_from(["replace", "replace", "delete", "add", "name"]))
+        if op == "replace":
+            parent[path[-1]] = draw(json_like)
+        elif op == "delete":
+            del parent[path[-1]]
+        elif op == "add" and isinstance(parent, dict):
+            parent[draw(hostile_text(WORDS))] = draw(json_like)
+        elif op == "name":
+            doc["name"] = draw(st.sampled_from(HOSTILE_WORDS) | st.text(max_size=30) | json_like)
+    return doc
+
+
+@st.composite
+def mutated_spec_text(draw):
+    """A catalog spec's text with 1-4 text mutations."""
+    lines = draw(st.sampled_from(TEXTS)).splitlines(keepends=True)
+    for _ in range(draw(st.integers(1, 4))):
+        op = draw(st.sampled_from(["delete", "dup", "swap", "snippet", "snippet", "edit"]))
+        i = draw(st.integers(0, len(lines) - 1)) if lines else 0
+        if op == "delete" and lines:
+            del lines[i]
+        elif op == "dup" and lines:
+            lines.insert(i, lines[i])
+        elif op == "swap" and lines:
+            j = draw(st.integers(0, len(lines) - 1))
+            lines[i], lines[j] = lines[j], lines[i]
+        elif op == "snippet":
+            lines.insert(i, draw(st.sampled_from(YAML_SNIPPETS)))
+        elif op == "edit" and lines:
+            line = lines[i]
+            k = draw(st.integers(0, len(line)))
+            lines[i] = line[:k] + draw(hostile_text(WORDS)) + line[k:]
+    return "".join(lines)
+
+
+FILE_STEMS = st.sampled_from(["spec", "J1-copy", "a b", ".", "x" * 120, "café", "-dash", "ok.v2"])
+
+
+def _check_one(text: str, stem: str) -> None:
+    with sandbox() as root:
+        folder = root / "in"
+        folder.mkdir()
+        path = write_text(folder / f"{stem}.yaml", text)
+        t = loads_or_names_file(read_yaml_spec, path)
+        index = import_stays_inside([path], root)
+        assert len(index["interchanges"]) == (t is not None)
+
+
+@FUZZ
+@given(doc=mutated_spec_doc(), stem=FILE_STEMS)
+def test_fuzz_yaml_spec_data_mutations_load_or_name_the_file(doc, stem):
+    _check_one(yaml.safe_dump(doc, allow_unicode=True, sort_keys=False), stem)
+
+
+@FUZZ
+@given(text=mutated_spec_text(), stem=FILE_STEMS)
+def test_fuzz_yaml_spec_text_mutations_load_or_name_the_file(text, stem):
+    _check_one(text, stem)
+
+
+# -- what the fuzzers found, kept as plain regression tests ----------------------------------
+
+@pytest.mark.parametrize("snippet, reason", [
+    ("x: &x [*x]\n", "recursive alias"),
+    (YAML_SNIPPETS[2], "expands to more than"),
+    ("d: 2023-13-45\n", "malformed YAML"),
+    ("[" * 3000 + "]" * 3000 + "\n", "malformed YAML"),
+])
+def test_yaml_tricks_are_one_line_errors(tmp_path, snippet, reason):
+    path = tmp_path / "trick.yaml"
+    path.write_text(snippet)
+    with pytest.raises(InputFormatError, match=reason) as info:
+        read_topologies(path)
+    assert_names_file(info.value, path)
+
+
+def test_yaml_bytes_that_are_not_utf8_are_named(tmp_path):
+    path = tmp_path / "latin1.yaml"
+    path.write_bytes("name: caf\xe9\n".encode("latin-1"))
+    with pytest.raises(InputFormatError, match="not UTF-8") as info:
+        read_yaml_spec(path)
+    assert_names_file(info.value, path)
+
+
+@pytest.mark.parametrize("ends", ["{from: 5, to: A1 right}", "{from: {A1: right}, to: A1 right}"])
+def test_endpoint_that_is_not_text_or_a_list_is_named(tmp_path, ends):
+    path = tmp_path / "e.yaml"
+    path.write_text(f"expressways: {{A: [A1, A2]}}\nramps:\n  r1: {ends}\n")
+    with pytest.raises(InputFormatError, match="one endpoint or a list") as info:
+        read_yaml_spec(path)
+    assert info.value.element == "ramps.r1.from"
+
+
+def test_endpoint_parsing_is_linear_in_its_length(tmp_path):
+    """The endpoint regex backtracked quadratically on long runs of blanks; now split."""
+    path = tmp_path / "blanks.yaml"
+    path.write_text("expressways: {A: [A1, A2]}\nramps:\n  r1: {from: 'A1 right" + " " * 200_000
+                    + "x', to: A2 right}\n")
+    with pytest.raises(InputFormatError, match="is not '<node>"):
+        read_yaml_spec(path)
+
+
+def test_a_name_that_is_a_path_is_refused_naming_file_and_name(tmp_path):
+    path = tmp_path / "evil.yaml"
+    path.write_text((catalog_dir() / "j1.yaml").read_text().replace("name: j1", "name: ../../../../x"))
+    with pytest.raises(UnsafeNameError) as info:
+        read_yaml_spec(path)
+    assert str(info.value).startswith(f"{path}: '../../../../x': unsafe interchange name")
+    assert "A-Z a-z 0-9 . _ -" in str(info.value)
+
+
+def test_city_import_of_a_path_name_writes_nothing_outside(tmp_path):
+    src = tmp_path / "in" / "evil.yaml"
+    src.parent.mkdir()
+    src.write_text((catalog_dir() / "j1.yaml").read_text().replace("name: j1", "name: ../../../../x"))
+    good = src.with_name("good.yaml")
+    good.write_text((catalog_dir() / "j1.yaml").read_text())
+    with sandbox() as root:
+        index = import_stays_inside([src, good], root)
+    assert [i["interchange"] for i in index["interchanges"]] == ["j1"]
+    assert index["rejected"][0]["element"] == "'../../../../x'"
+    assert not list(tmp_path.rglob("x.graphml")) and not Path("/x.graphml").exists()
