@@ -3,9 +3,10 @@
 A run starts empty: vehicles enter, and the first ones leave only after
 crossing the interchange, so for a while fewer leave than enter. The number
 of vehicles in the network, ``N = cumsum(entered - left)``, then levels off.
-The **stable window** begins at the first interval from which ``N`` stays in
-the band that it fills over the second half of the run (widened by a
-tolerance for the randomness of arrivals); the **stable throughput** is the
+The **stable window** begins at the first interval from which ``N`` stays
+within three standard deviations of its level over the second half of the
+run (at least Poisson's, the square root of the level: arrivals are random);
+the **stable throughput** is the
 vehicles leaving per hour over that window. The window is **balanced** when
 it is at least ``min_stable_s`` long and ``N`` changed over it by at most
 ``balance_tolerance`` of the vehicles that entered in it: a network still
@@ -14,14 +15,15 @@ filling up (a growing jam) is not.
 Example
 -------
 >>> import numpy as np
->>> entered = np.full(60, 30); left = np.r_[np.zeros(4, int), np.full(56, 30)]
+>>> entered = np.full(60, 30); left = np.r_[np.zeros(8, int), np.full(52, 30)]
 >>> w = stable_window(entered, left, 30.0)
 >>> w.stable_from_s, w.throughput_veh_h, w.balanced
-(120.0, 3600.0, True)
+(240.0, 3600.0, True)
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,10 +60,10 @@ class StableWindow:
 
 
 def stable_window(entered, left, interval_s: float, *, min_stable_s: float = 500.0,
-                  balance_tolerance: float = 0.05, noise_veh: float = 2.0) -> StableWindow:
+                  balance_tolerance: float = 0.05, noise_veh: float = 6.0) -> StableWindow:
     """Detect the stable window of a series of vehicles entering/leaving per interval.
 
-    ``noise_veh`` (and 2 % of the level) widen the band of the second half.
+    ``noise_veh`` is the smallest half-width of the band (vehicles).
     """
     e = np.asarray(entered, dtype=float)
     lv = np.asarray(left, dtype=float)
@@ -70,11 +72,16 @@ def stable_window(entered, left, interval_s: float, *, min_stable_s: float = 500
         raise ValueError("entered and left must be equally long and not empty")
     N = np.cumsum(e - lv)
     ref = N[n_int // 2:]
-    tol = max(noise_veh, 0.02 * float(np.abs(ref).mean()))
-    lo, hi = ref.min() - tol, ref.max() + tol
+    level = float(ref.mean())
+    # in a stationary network N varies about its level with (at least) Poisson spread
+    tol = 3.0 * max(float(ref.std()), math.sqrt(max(level, 0.0)), noise_veh / 3.0)
+    lo, hi = level - tol, level + tol
     at = np.r_[0.0, N]  # vehicles in the network at the start of each interval (and the end)
     outside = np.flatnonzero((at < lo) | (at > hi))  # interval i starts, i - 1 ends, outside
     start = int(outside[-1] + 1) if len(outside) else 0
+    # ... and from where it first comes within one deviation of the level (the end of filling)
+    near = np.flatnonzero(np.abs(at[start:n_int // 2 + 1] - level) <= tol / 3.0)
+    start += int(near[0]) if len(near) else 0
     start = min(start, n_int // 2)  # the band is the second half's: it starts there at latest
     w_e, w_l = e[start:], lv[start:]
     span_h = len(w_l) * interval_s / 3600.0
