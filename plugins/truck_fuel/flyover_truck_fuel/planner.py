@@ -179,7 +179,7 @@ class LatticePlanner:
         dpref = np.interp(st, self.route.s, self.route.d_pref)
         lon_viol = (np.maximum(acc - p.max_accel_mps2 * 1.05, 0).max(1)
                     + np.maximum(-acc - p.max_decel_mps2 * 1.05, 0).max(1)
-                    + np.maximum(v - env - 0.3, 0).max(1) + np.maximum(-v, 0).max(1)
+                    + np.maximum(v - env - 0.05, 0).max(1) + np.maximum(-v, 0).max(1)
                     + (length <= 1.0) * 10.0)
         lon_cost = (p.weight_longitudinal_jerk * (jerk**2).mean(1)
                     + p.weight_speed * ((v - p.preferred_speed_mps) ** 2).mean(1))

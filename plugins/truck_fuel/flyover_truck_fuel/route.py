@@ -167,18 +167,26 @@ def ramp_route(geometry: InterchangeGeometry, ramp: RampGeometry, p: RouteParams
 
 
 def straight_route(length_m: float, grade: float, p: RouteParams, *, radius_m: float = math.inf,
-                   turn_rad: float | None = None) -> Route:
-    """A test route: a constant ``grade`` over ``length_m``, straight or an arc of ``radius_m``.
+                   transition_m: float = 0.0) -> Route:
+    """A test route of ``length_m`` at a constant ``grade``: straight, or a left-turning
+    curve of ``radius_m`` entered and left through clothoids of ``transition_m`` each
+    (curvature linear in arc length), between straight leads at the same grade.
 
-    With a finite radius the ramp is a left-turning arc (of ``turn_rad``, default
-    ``length_m / radius_m``) between straight leads, as in the paper's Table IV.
+    A 90° ramp of radius ``R`` with clothoids of length ``T`` is
+    ``straight_route(R·π/2 + T, g, p, radius_m=R, transition_m=T)``.
     """
     n = max(2, int(math.ceil(length_m / (0.25 * p.spacing_m))))
     s = np.linspace(0.0, length_m, n + 1)
     if math.isinf(radius_m):
         x, y = s.copy(), np.zeros_like(s)
     else:
-        th = s / radius_m
-        x, y = radius_m * np.sin(th), radius_m * (1.0 - np.cos(th))
+        tr = min(transition_m, 0.5 * length_m)
+        k = np.full_like(s, 1.0 / radius_m)
+        if tr > 0:
+            k = np.minimum(k, np.minimum(s, length_m - s) / (tr * radius_m))
+        ds = np.diff(s)
+        th = np.concatenate([[0.0], np.cumsum(0.5 * (k[1:] + k[:-1]) * ds)])
+        x = np.concatenate([[0.0], np.cumsum(0.5 * (np.cos(th[1:]) + np.cos(th[:-1])) * ds)])
+        y = np.concatenate([[0.0], np.cumsum(0.5 * (np.sin(th[1:]) + np.sin(th[:-1])) * ds)])
     z = grade * s
     return _assemble(s, x, y, z, np.full_like(s, grade), float(length_m), 0.0, 0.0, p)
