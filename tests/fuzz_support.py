@@ -21,6 +21,7 @@ hypothesis deadline flags cases slower than ``DEADLINE``.
 from __future__ import annotations
 
 import contextlib
+import copy
 import os
 import signal
 import tempfile
@@ -218,3 +219,86 @@ def write_text(path: Path, text: str) -> Path:
     """Write ``text`` as UTF-8 (lone surrogates as they would come from broken bytes)."""
     path.write_bytes(text.encode("utf-8", "surrogatepass"))
     return path
+
+
+# -- YAML -------------------------------------------------------------------------
+
+#: YAML that has broken loaders: aliases, tags, dates, depth
+YAML_SNIPPETS = [
+    "a: &a [*a]\n", "x: &x {k: *x}\n",
+    "l0: &l0 [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+        f"l{i}: &l{i} [*l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}, *l{i-1}]\n"
+        for i in range(1, 9)),
+    "!!python/object/apply:os.system ['touch pwned']\n", "x: !!python/name:os.system\n",
+    "d: 2023-13-45\n", "d: 2023-02-30 25:61:61\n", "n: !!int x\n", "f: !!float abc\n",
+    "b: !!binary '@@@'\n", "t: !!timestamp 2020-99-99\n", "s: !!set {a, b}\n", "? [a, b]\n: c\n",
+    "[" * 3000 + "]" * 3000 + "\n", "{a: " * 3000 + "1" + "}" * 3000 + "\n",
+    "<<: *undefined\n", "%YAML 1.1\n---\n", "---\n---\n", "\t- x\n", "key: 'unterminated\n",
+    "big: " + "9" * 5000 + "\n", "\x00\n", "\ufeffname: x\n", "name: \udcff\n",
+]
+
+def json_values(words: list[str] = ()) -> st.SearchStrategy:
+    """Any YAML data: null, booleans, numbers, hostile text, small lists and mappings."""
+    return st.recursive(
+        st.none() | st.booleans() | st.integers(-10**20, 10**20) | st.floats() | hostile_text(words),
+        lambda inner: st.lists(inner, max_size=4) | st.dictionaries(hostile_text(words), inner, max_size=4),
+        max_leaves=12,
+    )
+
+
+def _paths(doc, prefix=()):
+    """Every (path, value) in a nested mapping/list."""
+    yield prefix, doc
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield from _paths(v, prefix + (k,))
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc):
+            yield from _paths(v, prefix + (i,))
+
+
+@st.composite
+def mutated_doc(draw, docs: list, words: list[str] = ()):
+    """One of ``docs`` (parsed YAML) with 1-4 data mutations: a value replaced, a key
+    deleted or added."""
+    doc = copy.deepcopy(draw(st.sampled_from(docs)))
+    for _ in range(draw(st.integers(1, 4))):
+        paths = [p for p, _ in _paths(doc) if p]
+        if not paths:
+            break
+        path = draw(st.sampled_from(paths))
+        parent = doc
+        for k in path[:-1]:
+            parent = parent[k]
+        op = draw(st.sampled_from(["replace", "replace", "delete", "add"]))
+        if op == "replace":
+            parent[path[-1]] = draw(json_values(words))
+        elif op == "delete":
+            del parent[path[-1]]
+        elif op == "add" and isinstance(parent, dict):
+            parent[draw(hostile_text(words))] = draw(json_values(words))
+    return doc
+
+
+@st.composite
+def mutated_yaml_text(draw, texts: list[str], words: list[str] = ()):
+    """One of ``texts`` (YAML) with 1-4 text mutations: lines dropped, duplicated, swapped,
+    edited, YAML tricks pasted in."""
+    lines = draw(st.sampled_from(texts)).splitlines(keepends=True)
+    for _ in range(draw(st.integers(1, 4))):
+        op = draw(st.sampled_from(["delete", "dup", "swap", "snippet", "snippet", "edit"]))
+        i = draw(st.integers(0, len(lines) - 1)) if lines else 0
+        if op == "delete" and lines:
+            del lines[i]
+        elif op == "dup" and lines:
+            lines.insert(i, lines[i])
+        elif op == "swap" and lines:
+            j = draw(st.integers(0, len(lines) - 1))
+            lines[i], lines[j] = lines[j], lines[i]
+        elif op == "snippet":
+            lines.insert(i, draw(st.sampled_from(YAML_SNIPPETS)))
+        elif op == "edit" and lines:
+            line = lines[i]
+            k = draw(st.integers(0, len(line)))
+            lines[i] = line[:k] + draw(hostile_text(words)) + line[k:]
+    return "".join(lines)

@@ -253,9 +253,17 @@ class XodrNetwork:
     source: str | None = None
 
 
+def _number(text: str, name: str) -> float:
+    """A finite number from an attribute (``nan``/``inf`` have no place in a road network)."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{name}={text!r} is not a finite number")
+    return value
+
+
 def _f(el, name: str, default: float = 0.0) -> float:
     v = el.get(name)
-    return float(v) if v is not None else default
+    return _number(v, name) if v is not None else default
 
 
 def _cubic(el, s_attr: str = "s") -> Cubic:
@@ -280,7 +288,7 @@ def _road(el) -> XodrRoad:
         child = next(iter(g), None)
         if child is None:
             continue
-        params = {k: float(v) for k, v in child.attrib.items() if k != "pRange"}
+        params = {k: _number(v, k) for k, v in child.attrib.items() if k != "pRange"}
         if child.tag == "paramPoly3":
             params["normalized"] = 0.0 if child.get("pRange") == "arcLength" else 1.0
         geoms.append(PlanGeometry(_f(g, "s"), _f(g, "x"), _f(g, "y"), _f(g, "hdg"), _f(g, "length"),
