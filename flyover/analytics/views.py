@@ -117,7 +117,7 @@ def query(sql: str, results_dir: str | os.PathLike = "results"):
 
     con, missing = connect(results_dir)
     try:
-        return con.execute(sql).fetch_arrow_table()
+        return con.execute(sql).to_arrow_table()
     except duckdb.CatalogException as exc:
         m = _MISSING.search(str(exc))
         if m and m.group(1).lower() in missing:
