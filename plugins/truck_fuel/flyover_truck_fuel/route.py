@@ -40,7 +40,8 @@ class Route:
     Attributes
     ----------
     s
-        Stations (m), uniform spacing, ``s = 0`` at the ramp's start.
+        Stations (m), at most ``spacing_m`` apart (uniform on the leads and, slightly
+        closer, on the ramp), ``s = 0`` at the ramp's start.
     x, y, z, heading, curvature, grade
         Lane-centre position, height, heading (rad, unwrapped), signed
         curvature (1/m, positive left) and grade (rise/run) at ``s``.
@@ -62,7 +63,8 @@ class Route:
 
     @property
     def spacing_m(self) -> float:
-        return float(self.s[1] - self.s[0])
+        """The largest station spacing."""
+        return float(np.diff(self.s).max())
 
     def on_ramp(self) -> np.ndarray:
         """Mask of the stations on the ramp itself."""
