@@ -146,13 +146,52 @@ class LatticePlanner:
         self.fractions = np.asarray(p.speed_fractions, float)
         self.horizons = np.asarray(p.horizons_s, float)
         self.tau = np.linspace(1.0 / _SAMPLES, 1.0, _SAMPLES)
+        n_t = len(self.horizons)
+        self._vs_fixed = np.repeat(p.preferred_speed_mps * self.fractions, n_t)
+        self._tl = np.tile(self.horizons, len(self.fractions) + 2)
+
+    def _end_speeds(self, s0: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
+        """End speeds (fractions of the preferred speed, the envelope ahead, the current
+        speed) and horizons of the longitudinal candidates, flattened."""
+        T = self.horizons
+        ahead = np.interp(s0 + v0 * T, self.route.s, self.env)
+        vs = np.concatenate([self._vs_fixed, ahead, np.full(len(T), v0)])
+        return np.maximum(vs, self.p.min_speed_mps), self._tl
+
+    def plan(self, s0: float, d0: float, d1: float, d2: float, v0: float, a0: float) -> Plan:
+        """The best trajectory from station ``s0`` with lateral state ``(d0, d', d'')``
+        and longitudinal state ``(v0, a0)`` (compiled; same result as :meth:`plan_numpy`)."""
+        from flyover_truck_fuel._lattice import best_candidate  # noqa: PLC0415
+
+        p, r = self.p, self.route
+        v0 = max(v0, 0.1)
+        vs, tl = self._end_speeds(s0, v0)
+        o, l_, ok, viol, alat = best_candidate(
+            float(s0), float(d0), float(d1), float(d2), float(v0), float(a0), vs, tl,
+            self.offsets, self.tau, r.s, r.curvature, self.env, r.d_pref,
+            p.max_lateral_accel_mps2, self.k_max, p.max_accel_mps2, p.max_decel_mps2,
+            p.preferred_speed_mps, p.weight_deviation, p.weight_lateral_jerk,
+            p.weight_longitudinal_jerk, p.weight_speed)
+        T, v_end = float(tl[l_]), float(vs[l_])
+        dv = v_end - v0 - a0 * T
+        c = np.array([v0, 0.5 * a0, dv / T**2 + a0 / (3 * T), -a0 / (4 * T**2) - dv / (2 * T**3)])
+        length = max(float(T * (c[0] + T * (c[1] + T * (c[2] + T * c[3])))), 1.0)
+        d_end = float(np.interp(s0 + length, r.s, r.d_pref)) + float(self.offsets[o])
+        S, a2 = length, 0.5 * d2
+        h = d_end - d0 - d1 * S - a2 * S * S
+        vv, w = -d1 - 2 * a2 * S, -2 * a2
+        a = np.array([d0, d1, a2, (10 * h - 4 * vv * S + 0.5 * w * S * S) / S**3,
+                      (-15 * h + 7 * vv * S - w * S * S) / S**4,
+                      (6 * h - 3 * vv * S + 0.5 * w * S * S) / S**5])
+        return Plan(float(s0), length, a, c, T, bool(ok), float(viol), float(alat))
 
     def _at(self, s: np.ndarray, col: np.ndarray) -> np.ndarray:
         return np.interp(s, self.route.s, col)
 
-    def plan(self, s0: float, d0: float, d1: float, d2: float, v0: float, a0: float) -> Plan:
-        """The best trajectory from station ``s0`` with lateral state ``(d0, d', d'')``
-        and longitudinal state ``(v0, a0)``."""
+    def plan_numpy(self, s0: float, d0: float, d1: float, d2: float, v0: float,
+                   a0: float) -> Plan:
+        """:meth:`plan` written with numpy arrays over all candidates (the readable
+        reference of the compiled kernel)."""
         p = self.p
         v0 = max(v0, 0.1)
         T = self.horizons

@@ -79,3 +79,17 @@ def test_tracking_error_stays_small_on_catalog_ramps(st, j1_geometry):
         assert s.completed, s.reason
         assert s.max_lateral_error_m <= 0.3
         assert s.max_lateral_accel_mps2 <= st.planner.max_lateral_accel_mps2 * 1.05
+
+
+def test_compiled_lattice_picks_the_same_plan_as_the_numpy_reference(st):
+    route = _curve(st, 40.0)
+    planner = LatticePlanner(route, st.planner, st.truck)
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        state = (rng.uniform(-120.0, 80.0), rng.uniform(-1.0, 1.0), rng.uniform(-0.05, 0.05),
+                 rng.uniform(-0.01, 0.01), rng.uniform(2.0, 12.0), rng.uniform(-1.0, 1.0))
+        a, b = planner.plan(*state), planner.plan_numpy(*state)
+        assert a.feasible == b.feasible and a.horizon == b.horizon
+        assert a.quintic == pytest.approx(b.quintic, rel=1e-9, abs=1e-12)
+        assert a.speed == pytest.approx(b.speed, rel=1e-9, abs=1e-12)
+        assert a.max_lateral_accel == pytest.approx(b.max_lateral_accel, rel=1e-9, abs=1e-12)
