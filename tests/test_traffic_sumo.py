@@ -91,8 +91,9 @@ def test_a_missing_or_broken_network_is_a_row_and_the_class_goes_on(t_net, tmp_p
     assert table.schema.names[:10] == ["class_id", "sample", "density_veh_h", "throughput_veh_h",
                                        "entered", "left", "not_inserted", "teleports",
                                        "collisions", "stable_from_s"]
-    tp, st = aggregate_tables([tmp_path / "ct.parquet"], tmp_path / "throughput.parquet",
-                              tmp_path / "throughput_stats.parquet")
+    tp, st, _ = aggregate_tables([tmp_path / "ct.parquet"], [tmp_path / "ct" / "series.parquet"],
+                                 tmp_path / "throughput.parquet",
+                                 tmp_path / "throughput_stats.parquet")
     assert len(tp) == 3 and pq.read_table(tmp_path / "throughput.parquet").schema.equals(
         THROUGHPUT_SCHEMA)
     assert any(r["scope"] == "inter_class_std" for r in st)

@@ -178,22 +178,24 @@ def read_rows(paths: Iterable[str | os.PathLike], schema: pa.Schema) -> list[dic
     return rows
 
 
-def aggregate_tables(class_tables: Sequence[str | os.PathLike], throughput: str | os.PathLike,
-                     stats: str | os.PathLike, *, classes: str | os.PathLike | None = None
-                     ) -> tuple[list[dict], list[dict]]:
+def aggregate_tables(class_tables: Sequence[str | os.PathLike],
+                     series_tables: Sequence[str | os.PathLike], throughput: str | os.PathLike,
+                     stats: str | os.PathLike) -> tuple[list[dict], list[dict], list[dict]]:
     """Per-class tables → ``throughput.parquet`` and ``throughput_stats.parquet``.
 
-    ``classes`` (``classes.parquet``) names the classes in the statistics'
-    log; the statistics need the series tables beside each class table
-    (``{class_id}/series.parquet``).
+    ``series_tables`` are the classes' time series (the sample t-tests use the
+    per-interval throughputs of the stable windows). Returns the rows of both
+    tables and the series rows.
     """
     from flyover.traffic.stats import STATS_SCHEMA, throughput_stats  # noqa: PLC0415
 
-    tables = sorted(class_tables, key=lambda p: Path(p).name)
-    rows = read_rows(tables, THROUGHPUT_SCHEMA)
-    series = read_rows([Path(p).with_suffix("") / "series.parquet" for p in tables
-                        if (Path(p).with_suffix("") / "series.parquet").exists()], SERIES_SCHEMA)
+    rows = read_rows(sorted(class_tables, key=lambda p: Path(p).name), THROUGHPUT_SCHEMA)
+    series = read_rows(sorted(series_tables, key=lambda p: Path(p).parent.name), SERIES_SCHEMA)
     write_parquet(rows, THROUGHPUT_SCHEMA, throughput)
     srows = throughput_stats(rows, series)
     write_parquet(srows, STATS_SCHEMA, stats)
-    return rows, srows
+    flagged = sum(r["flagged"] for r in rows)
+    if flagged:
+        log.warning("%d of %d runs flagged (teleports or collisions): kept in the statistics and "
+                    "counted in their n_flagged columns", flagged, len(rows))
+    return rows, srows, series

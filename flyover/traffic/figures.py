@@ -21,7 +21,7 @@ import numpy as np
 
 from flyover.topology.io import atomic_write
 
-__all__ = ["plot_series", "plot_class_throughput", "plot_pvalues"]
+__all__ = ["plot_series", "plot_class_throughput", "plot_pvalues", "class_names", "throughput_figures"]
 
 
 def _pyplot():
@@ -146,3 +146,29 @@ def plot_pvalues(stats: Sequence[dict], names: Mapping[str, str], path: str | os
         fig.colorbar(im, ax=list(axes[0]), shrink=0.7, label="p-value (Welch)")
     fig.suptitle("p-values between classes (shown where >= 0.05)", fontsize=10)
     _save(fig, path)
+
+
+def class_names(classes_table: str | os.PathLike) -> dict[str, str]:
+    """class id → class name, from ``classes.parquet``."""
+    import pyarrow.parquet as pq  # noqa: PLC0415
+
+    t = pq.read_table(classes_table, columns=["class_id", "class_name"]).to_pylist()
+    return {r["class_id"]: r["class_name"] for r in sorted(t, key=lambda r: r["class_id"])}
+
+
+def throughput_figures(rows: Sequence[dict], stats: Sequence[dict], series: Sequence[dict],
+                       names: Mapping[str, str], fig4: str | os.PathLike,
+                       fig5: str | os.PathLike, fig6: str | os.PathLike) -> None:
+    """Fig. 4 (the first interchange, by class name and sample, that ran), Fig. 5 and Fig. 6."""
+    ran = sorted({(_name(names, r["class_id"]), r["class_id"], r["sample"]) for r in rows
+                  if r["ok"]})
+    if ran:
+        _, c, s = ran[0]
+        plot_series([x for x in series if x["class_id"] == c and x["sample"] == s],
+                    [r for r in rows if r["class_id"] == c and r["sample"] == s and r["ok"]], fig4,
+                    title=f"{_name(names, c)} sample {s}: vehicles entering and leaving "
+                          "(dashed: stable from; dotted: stable throughput)")
+    else:
+        plot_series([], [], fig4, title="no run completed")
+    plot_class_throughput(rows, names, fig5)
+    plot_pvalues(stats, names, fig6)

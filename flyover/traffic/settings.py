@@ -61,6 +61,9 @@ class ThroughputSettings:
         Insertion: headways, SUMO ``departLane`` and ``departSpeed``.
     time_to_teleport_s
         SUMO's ``--time-to-teleport`` (a vehicle stuck this long is teleported, counted).
+    max_depart_delay_s
+        SUMO's ``--max-depart-delay``: a vehicle that could not be inserted for this
+        long is dropped (counted as not inserted); negative = never.
     min_stable_s
         Shortest stable window; a run whose window is shorter is not balanced.
     balance_tolerance
@@ -80,6 +83,7 @@ class ThroughputSettings:
     depart_lane: DepartLane = DepartLane.FREE
     depart_speed: str = "max"
     time_to_teleport_s: float = 300.0
+    max_depart_delay_s: float = -1.0
     min_stable_s: float = 500.0
     balance_tolerance: float = 0.05
     seed: int = 20231024
@@ -105,6 +109,7 @@ class ThroughputSettings:
                            ("samples_per_class", int), ("uturns", bool),
                            ("arrivals", Arrivals), ("depart_lane", DepartLane),
                            ("depart_speed", str), ("time_to_teleport_s", float),
+                           ("max_depart_delay_s", float),
                            ("min_stable_s", float), ("balance_tolerance", float)):
             if name in sec:
                 try:

@@ -47,7 +47,8 @@ class RunResult:
     loaded
         Vehicles the flows generated (inserted or waiting to be).
     not_inserted
-        Generated vehicles still waiting for insertion at the end.
+        Generated vehicles never inserted (waiting at the end, or dropped after
+        ``max_depart_delay_s``).
     running
         Vehicles in the network at the end.
     teleports
@@ -79,6 +80,7 @@ def sumo_args(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
             "--begin", "0", "--end", repr(float(settings.duration_s)),
             "--step-length", repr(float(settings.step_length_s)),
             "--time-to-teleport", repr(float(settings.time_to_teleport_s)),
+            "--max-depart-delay", repr(float(settings.max_depart_delay_s)),
             "--collision.action", "teleport",
             "--no-step-log", "true", "--duration-log.disable", "true",
             "--error-log", str(error_log)]
@@ -127,7 +129,7 @@ def simulate(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
                 loaded += sim.getLoadedNumber()
                 teleports += sim.getStartingTeleportNumber()
                 collisions += len(sim.getCollisions())
-            not_inserted = len(sim.getPendingVehicles())
+            departed = int(entered.sum())
             running = libsumo.vehicle.getIDCount()
         except Exception as exc:
             msg = _first_error(elog) or str(exc) or type(exc).__name__
@@ -136,7 +138,7 @@ def simulate(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
             _close(libsumo)
         reasons = _reasons(elog)
     wall = time.perf_counter() - t0
-    return RunResult(float(settings.interval_s), entered, left, int(loaded), int(not_inserted),
+    return RunResult(float(settings.interval_s), entered, left, int(loaded), int(loaded - departed),
                      int(running), int(teleports), reasons, int(collisions), wall)
 
 
