@@ -108,3 +108,44 @@ def test_cli_prints_throughput_and_counts(t_net, capsys):
     code = main(["throughput", str(t_net), "--density", "450", "--duration", "300"])
     out = capsys.readouterr().out
     assert "450 veh/h x 4 movements (demand 1800 veh/h): throughput" in out
+
+
+def _aux_lengths(net_path, road_lanes):
+    """Lengths of the stretches (runs of consecutive edges of one OpenDRIVE road) on which
+    the SUMO network has more lanes than the road's own ``road_lanes``."""
+    import sumolib
+
+    from flyover.sumo.routes import road_edges
+
+    runs = []
+    for edges in road_edges(sumolib.net.readNet(str(net_path))).values():
+        run = 0.0
+        for e in edges:
+            if e.getLaneNumber() > road_lanes:
+                run += e.getLength()
+            elif run:
+                runs.append(run)
+                run = 0.0
+        if run:
+            runs.append(run)
+    return sorted(runs)
+
+
+def test_auxiliary_lanes_leave_room_to_change_lanes(tmp_path):
+    # the loop sample: A1 (2 lanes) has a deceleration lane before r1 leaves it, B1 an
+    # acceleration lane after r1 joins it. With tapers alone (the former export) a vehicle had
+    # ~70 m, mostly taper, to get in or out: SUMO jammed at every cloverleaf loop at 1800 veh/h
+    from flyover.opendrive.writer import ExportOptions, xodr_bytes
+
+    lengths = {}
+    for name, opts in (("tapers", ExportOptions(decel_length_m=0.0, accel_length_m=0.0)),
+                       ("parallel", ExportOptions())):
+        (tmp_path / f"{name}.xodr").write_bytes(xodr_bytes(sample_geometry("loop"), opts))
+        assert run_netconvert(tmp_path / f"{name}.xodr", tmp_path / f"{name}.net.xml").ok
+        lengths[name] = _aux_lengths(tmp_path / f"{name}.net.xml", 2)
+    assert len(lengths["tapers"]) == len(lengths["parallel"]) == 2
+    assert max(lengths["tapers"]) < 80.0
+    opts = ExportOptions()
+    decel, accel = lengths["parallel"]
+    assert decel >= opts.decel_length_m + opts.taper_length_m / 3
+    assert accel >= opts.accel_length_m + opts.taper_length_m / 3
