@@ -28,6 +28,9 @@ def main() -> None:
     ap.add_argument("--results", default="results")
     ap.add_argument("--limit", type=int, default=0, help="at most N interchanges (0: all)")
     ap.add_argument("--out", default="", help="where to write the fuel partitions")
+    ap.add_argument("--replicate", type=int, default=40,
+                    help="time the queries also on the fuel partitions copied this many times "
+                         "(as other samples): catalog scale is ~7,000 ramps in ~820 partitions")
     args = ap.parse_args()
 
     from flyover.analytics import NAMED_QUERIES, MissingTableError, query
@@ -100,6 +103,25 @@ def main() -> None:
         res = query(NAMED_QUERIES["fuel-by-direction"].sql, tmp)
         for r in res.to_pylist():
             print("  ", r)
+        if args.replicate > 1:
+            (tmp / "fuel").unlink()
+            parts = sorted((out / "fuel").glob("class_id=*/sample=*/part-0.parquet"))
+            for k in range(args.replicate):
+                for part in parts:
+                    s = int(part.parent.name.split("=")[1]) + 1000 * k
+                    dst = tmp / "fuel" / part.parent.parent.name / f"sample={s}" / part.name
+                    dst.parent.mkdir(parents=True, exist_ok=True)
+                    shutil.copyfile(part, dst)
+            n = query("SELECT count(*) AS n FROM fuel", tmp).column("n")[0].as_py()
+            print(f"queries over {len(parts) * args.replicate} partitions, {n} rows:")
+            for q in NAMED_QUERIES.values():
+                t0 = time.perf_counter()
+                try:
+                    tbl = query(q.sql, tmp)
+                    print(f"query {q.name:20s} {time.perf_counter() - t0:6.3f} s, "
+                          f"{tbl.num_rows} rows")
+                except MissingTableError as exc:
+                    print(f"query {q.name:20s} skipped: {exc.table} not built")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
         if not args.out:

@@ -77,11 +77,18 @@ def _sql_str(s: str) -> str:
     return "'" + s.replace("'", "''") + "'"
 
 
-def connect(results_dir: str | os.PathLike = "results"):
+def _referenced(sql: str) -> set[str]:
+    """The view names that occur as words in ``sql`` (a superset of those it reads)."""
+    words = {w.lower() for w in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", sql)}
+    return {v.name for v in VIEWS if v.name in words}
+
+
+def connect(results_dir: str | os.PathLike = "results", names: set[str] | None = None):
     """An in-memory DuckDB connection with a view per table that exists.
 
-    Returns ``(connection, missing)`` where ``missing`` maps the name of each
-    view whose files are absent to its :class:`TableSource`.
+    Only the views in ``names`` are made (default: all). Returns
+    ``(connection, missing)`` where ``missing`` maps the name of each wanted view
+    whose files are absent to its :class:`TableSource`.
     """
     import duckdb  # noqa: PLC0415
 
@@ -89,12 +96,15 @@ def connect(results_dir: str | os.PathLike = "results"):
     con = duckdb.connect(":memory:")
     missing = {}
     for src in VIEWS:
+        if names is not None and src.name not in names:
+            continue
         pattern = _files(results, src)
         if pattern is None:
             missing[src.name] = src
             continue
         glob = _sql_str(str(results / pattern))
-        opts = "hive_partitioning = true, union_by_name = true" if src.hive else \
+        # a plugin's partitions share one schema: no union_by_name (it reads every footer)
+        opts = "hive_partitioning = true" if src.hive else \
             "hive_partitioning = false, union_by_name = true"
         con.execute(f"CREATE VIEW {src.name} AS SELECT * FROM read_parquet({glob}, {opts})")
     return con, missing
@@ -115,7 +125,7 @@ def query(sql: str, results_dir: str | os.PathLike = "results"):
     """
     import duckdb  # noqa: PLC0415
 
-    con, missing = connect(results_dir)
+    con, missing = connect(results_dir, _referenced(sql))
     try:
         return con.execute(sql).to_arrow_table()
     except duckdb.CatalogException as exc:

@@ -120,18 +120,24 @@ def quartic_speed(v0, a0, v_end, horizon):
 def speed_envelope(route: Route, p: PlannerParams, truck: TruckParams,
                    margin: float = 0.95) -> np.ndarray:
     """The highest speed at each station that keeps the lateral-acceleration limit
-    on the route's curvature (times ``margin``) and from which every later limit
-    can be met braking at ``max_decel_mps2``; capped at the preferred speed."""
+    on the route's curvature (times ``margin``), capped at the preferred speed,
+    made reachable (a backward pass at ``max_decel_mps2``: every later limit can be
+    met by braking; a forward pass at ``max_accel_mps2``) and widened by the
+    planner's sample spacing (a running minimum), so that no sample falls beside
+    a short curvature peak."""
+    from scipy.ndimage import minimum_filter1d  # noqa: PLC0415
+
     k = np.maximum(np.abs(route.curvature), 1e-9)
     v = np.minimum(np.sqrt(margin * p.max_lateral_accel_mps2 / k), p.preferred_speed_mps)
-    v = np.maximum(v, p.min_speed_mps)
+    v = np.maximum(v, p.min_speed_mps) ** 2
     ds = route.spacing_m
-    # backward pass: v[i] <= sqrt(v[i+1]^2 + 2 a ds) (numpy: running minimum of a transformed series)
-    n = len(v)
-    idx = np.arange(n)
-    w = v**2 + 2 * p.max_decel_mps2 * ds * idx
-    w = np.minimum.accumulate(w[::-1])[::-1]
-    return np.sqrt(np.maximum(w - 2 * p.max_decel_mps2 * ds * idx, 0.0))
+    x = 2.0 * ds * np.arange(len(v))
+    # v[i]^2 <= v[j]^2 + 2 a |i - j| ds for j after i (braking) and before i (accelerating)
+    v = np.minimum.accumulate((v + p.max_decel_mps2 * x)[::-1])[::-1] - p.max_decel_mps2 * x
+    v = np.minimum.accumulate(v - p.max_accel_mps2 * x) + p.max_accel_mps2 * x
+    reach = p.preferred_speed_mps * max(p.horizons_s) / _SAMPLES
+    v = minimum_filter1d(v, 2 * int(np.ceil(reach / ds)) + 1, mode="nearest")
+    return np.sqrt(np.maximum(v, 0.0))
 
 
 class LatticePlanner:
