@@ -73,7 +73,8 @@ def _hbefa(args) -> int:
     rows = [{"case": c.case, "grade_pct": c.grade_pct, "length_m": c.length_m,
              "ours_ml_per_km": c.ours_ml_per_km, "hbefa4_ml_per_km": c.hbefa_ml_per_km,
              "ours/hbefa": c.ratio} for c in checks]
-    print(f"ours (40 t, Willans line) beside SUMO {HBEFA_CLASS}, same speed and grade profile")
+    print(f"ours ({st.truck.mass_kg / 1000:g} t, Willans line) beside SUMO {HBEFA_CLASS}, "
+          "same speed and grade profile")
     _print_table(rows, list(rows[0]))
     return 0
 
