@@ -126,10 +126,17 @@ def write_graphml(topology: Topology, path: str | os.PathLike) -> None:
 def read_graphml(path: str | os.PathLike, name: str | None = None) -> Topology:
     """Read native or FLYOVER-dataset GraphML (detected from the attributes).
 
+    The topology's name is ``name``, else the graph's ``name`` attribute, else the
+    file name without suffix; it must be a safe name (:mod:`flyover.topology.names`).
+    FLYOVER-dataset nodes are keyed on their GraphML id (the dataset's ``name``
+    attribute can repeat within a file and is kept as a node attribute).
+
     Raises
     ------
     InputFormatError
         The file is not GraphML or follows neither schema.
+    UnsafeNameError
+        The name is not a safe name (it becomes a file name).
     TopologyError
         The topology breaks a model rule.
     """
@@ -273,7 +280,20 @@ def _endpoint(item: Any) -> tuple[str, str, str | None] | None:
 
 
 def read_yaml_spec(path: str | os.PathLike) -> Topology:
-    """Read a YAML spec (format in the module docstring and the README)."""
+    """Read a YAML spec (format in the module docstring and the README).
+
+    The file is parsed by :func:`flyover.safe_yaml.load_yaml` (bounded work); the
+    name (``name:``, else the file name without suffix) must be a safe name.
+
+    Raises
+    ------
+    InputFormatError
+        Not UTF-8, malformed YAML, or not a spec (naming the key at fault).
+    UnsafeNameError
+        The name is not a safe name (it becomes a file name).
+    TopologyError
+        The topology breaks a model rule.
+    """
     src = str(path)
     doc = load_yaml(path, error=InputFormatError)
     return topology_from_spec(doc, src, default_name=Path(path).stem)
