@@ -4,7 +4,10 @@ The movements are the topology's (:func:`flyover.opendrive.validate.movements`,
 the same ones the ``routes`` validation routes), found on the SUMO network
 through the OpenDRIVE file it was converted from (road ``name`` = topology
 element; :func:`flyover.sumo.routes.road_edges`). U-turns back onto the
-entrance's own expressway are left out unless asked for. A movement without a
+entrance's own expressway are left out unless asked for. Going straight on
+follows the road's own edges (the shortest path could take a collector-
+distributor road that leaves and rejoins it); a turn takes the shortest path.
+A movement without a
 route in the network is a :class:`DemandError`: the experiment is never
 silently smaller than the topology.
 
@@ -70,12 +73,19 @@ def interchange_flows(net_path: str | os.PathLike, geometry, xodr_path: str | os
     xodr = read_xodr(xodr_path)
     first = {r.name: r.id for r in xodr.roads.values() if r.junction == "-1" and r.predecessor is None}
     last = {r.name: r.id for r in xodr.roads.values() if r.junction == "-1" and r.successor is None}
+    name = {r.id: r.name for r in xodr.roads.values()}
     net = _net(net_path)
     edges = road_edges(net)
+    element = {e.getID(): name.get(rid) for rid, es in edges.items() for e in es}
     flows, missing = [], []
     for u, v in moves:
         a, b = edges.get(first.get(u, "?")), edges.get(last.get(v, "?"))
-        path = net.getShortestPath(a[0], b[-1])[0] if a and b else None
+        if not (a and b):
+            path = None
+        elif u == v:  # straight on: along the road itself, never round a ramp that rejoins it
+            path = _along(a[0], b[-1], u, element)
+        else:
+            path = net.getShortestPath(a[0], b[-1])[0]
         if path is None:
             missing.append(f"{u}->{v}")
             continue
@@ -85,6 +95,20 @@ def interchange_flows(net_path: str | os.PathLike, geometry, xodr_path: str | os
                           f"network: {', '.join(missing)}", source=str(net_path),
                           element=missing[0])
     return flows
+
+
+def _along(start, end, road: str, element: dict[str, str | None]):
+    """The edges from ``start`` to ``end`` that stay on the topology element ``road``."""
+    path, e, seen = [start], start, {start.getID()}
+    while e is not end:
+        nxt = sorted((x for x in e.getOutgoing() if element.get(x.getID()) == road
+                      and x.getID() not in seen), key=lambda x: x.getID())
+        if not nxt:
+            return None
+        e = nxt[0]
+        seen.add(e.getID())
+        path.append(e)
+    return path
 
 
 def network_flows(net_path: str | os.PathLike) -> list[Flow]:
