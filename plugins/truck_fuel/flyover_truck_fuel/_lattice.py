@@ -8,7 +8,6 @@ acceleration.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from numba import njit

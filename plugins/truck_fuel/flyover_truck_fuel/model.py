@@ -39,7 +39,6 @@ planner's quartic ``s(t)``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 

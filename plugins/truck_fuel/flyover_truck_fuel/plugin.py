@@ -67,7 +67,7 @@ def evaluate_ramp(geometry, ramp, st: Settings) -> dict[str, Any]:
     except Exception as exc:  # noqa: BLE001 - a malformed ramp is a row, not a crash
         log.warning("%s/%s ramp %s: no route: %s", geometry.class_id, geometry.sample,
                     ramp.id, exc)
-        row.update(direction="level", length_m=ramp.length_m, completed=False,
+        row.update(direction=None, length_m=ramp.length_m, completed=False,
                    reason=f"no route: {type(exc).__name__}: {exc}")
         return row
     row.update(direction=direction(route.climb_m, st.route.level_tolerance_m),
@@ -110,5 +110,5 @@ class TruckFuelPlugin:
 
     def failure_rows(self, class_id: str, sample: int, reason: str) -> list[dict[str, Any]]:
         """The row recording an interchange that could not be evaluated at all."""
-        return [{"class_id": class_id, "sample": int(sample), "ramp": "", "direction": "level",
+        return [{"class_id": class_id, "sample": int(sample), "ramp": "", "direction": None,
                  "completed": False, "reason": reason}]

@@ -22,7 +22,7 @@ import numpy as np
 
 from flyover_truck_fuel.model import STATE, closed_loop
 from flyover_truck_fuel.params import Settings
-from flyover_truck_fuel.planner import LatticePlanner, Plan
+from flyover_truck_fuel.planner import LatticePlanner
 from flyover_truck_fuel.route import Route
 
 __all__ = ["Drive", "RampSummary", "drive", "ramp_summary"]
