@@ -30,6 +30,11 @@ def results(tmp_path):
         "city": ["catalog", "catalog", "x"], "interchange": ["j1", "trumpet", "t2"],
         "class_id": ["c0000000001", "c0000000002", "c0000000002"],
         "class_name": ["j1", "trumpet", "trumpet"]}), res / "classes.parquet")
+    pq.write_table(pa.table({
+        "class_id": [r[0] for r in FUEL], "sample": [r[1] for r in FUEL],
+        "ramp": [r[2] for r in FUEL],
+        "target_radius_m": [30.0, 60.0, 30.0, 150.0, float("inf")],
+        "target_slope_pct": [4.0, 2.0, 4.0, 1.0, 0.0]}), res / "geometry.parquet")
     for c, s in {(r[0], r[1]) for r in FUEL}:
         rows = [r for r in FUEL if r[:2] == (c, s)]
         part = res / "fuel" / f"class_id={c}" / f"sample={s}"
@@ -75,9 +80,9 @@ def test_fuel_by_class_joins_class_names_and_takes_completed_rows(results):
     assert by[("trumpet", "level")]["median_ml_per_km"] is None  # not completed: no figure
 
 
-def test_fuel_grid_bins_radius_to_the_papers_values(results):
+def test_fuel_grid_groups_by_the_ramps_target_radius_and_slope(results):
     rows = query(NAMED_QUERIES["fuel-grid"].sql, results).to_pylist()
-    cells = {(r["radius_bin_m"], r["slope_bin_pct"], r["direction"]): r["mean_ml_per_km"]
+    cells = {(r["radius_m"], r["slope_pct"], r["direction"]): r["mean_ml_per_km"]
              for r in rows}
     assert cells == {(30, 4, "up"): 1500.0, (60, 2, "down"): 0.0, (150, 1, "up"): 600.0}
 

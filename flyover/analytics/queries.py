@@ -50,18 +50,18 @@ NAMED_QUERIES: dict[str, NamedQuery] = {q.name: q for q in (
         """),
     NamedQuery(
         "fuel-grid",
-        "paper Table IV from the catalog: mean ml/km by radius (nearest of 30..280 m), "
-        "slope (nearest whole %) and direction",
+        "paper Table IV from the catalog: fuel by the ramps' target radius and slope "
+        "(geometry's targets) and direction",
         """
-        WITH g AS (SELECT * FROM (VALUES (30), (40), (60), (100), (150), (210), (280)) t(r)),
-        f AS (
-            SELECT *, (SELECT r FROM g ORDER BY abs(g.r - least(fuel.min_radius_m, 1e6)) LIMIT 1)
-                      AS radius_bin_m,
-                   greatest(1, least(4, round(max_slope_pct)))::INT AS slope_bin_pct
-            FROM fuel WHERE completed AND direction <> 'level')
-        SELECT radius_bin_m, slope_bin_pct, direction, count(*) AS ramps,
-               round(avg(fuel_ml_per_km), 1) AS mean_ml_per_km
-        FROM f GROUP BY ALL ORDER BY direction DESC, radius_bin_m, slope_bin_pct
+        SELECT g.target_radius_m AS radius_m, g.target_slope_pct AS slope_pct, f.direction,
+               count(*) AS ramps,
+               round(avg(f.fuel_ml), 1) AS mean_ml_per_ramp,
+               round(avg(f.fuel_ml_per_km), 1) AS mean_ml_per_km,
+               round(avg(f.mean_speed_mps), 2) AS mean_speed_mps
+        FROM fuel f JOIN geometry g
+          ON g.class_id = f.class_id AND g.sample = f.sample AND g.ramp = f.ramp
+        WHERE f.completed AND f.direction <> 'level'
+        GROUP BY ALL ORDER BY f.direction DESC, radius_m, slope_pct
         """),
     NamedQuery(
         "fuel-incomplete",
