@@ -65,7 +65,11 @@ def _run(args: argparse.Namespace) -> int:
     elif args.format == "json":
         import json  # noqa: PLC0415
 
-        json.dump(tbl.to_pylist(), sys.stdout, indent=1, default=str, allow_nan=True)
+        import math  # noqa: PLC0415
+
+        rows = [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                 for k, v in r.items()} for r in tbl.to_pylist()]
+        json.dump(rows, sys.stdout, indent=1, default=str)  # NaN/inf → null: valid JSON
         print()
     else:
         print(_table(tbl))

@@ -58,7 +58,7 @@ VIEWS: tuple[TableSource, ...] = (
                              "interchanges/*/*/geometry.parquet"), "geometry_table"),
     TableSource("validation", ("validation.parquet",
                                "interchanges/*/*/validation.parquet"), "validation"),
-    TableSource("throughput", ("throughput.parquet",), "throughput"),
+    TableSource("throughput", ("throughput.parquet", "throughput/c*.parquet"), "throughput"),
     TableSource("throughput_stats", ("throughput_stats.parquet",), "throughput"),
     TableSource("fuel", ("fuel/class_id=*/sample=*/*.parquet",), "plugins", hive=True),
 )
