@@ -67,9 +67,13 @@ def _run(args: argparse.Namespace) -> int:
 
         import math  # noqa: PLC0415
 
-        rows = [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                 for k, v in r.items()} for r in tbl.to_pylist()]
-        json.dump(rows, sys.stdout, indent=1, default=str)  # NaN/inf → null: valid JSON
+        def _json(v):  # valid JSON: NaN → null, ±inf → "inf"/"-inf" (as geometry.json)
+            if isinstance(v, float) and not math.isfinite(v):
+                return None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+            return v
+
+        rows = [{k: _json(v) for k, v in r.items()} for r in tbl.to_pylist()]
+        json.dump(rows, sys.stdout, indent=1, default=str)
         print()
     else:
         print(_table(tbl))
