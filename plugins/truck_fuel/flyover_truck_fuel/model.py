@@ -7,7 +7,7 @@ State (road-aligned frame of a :class:`~flyover_truck_fuel.route.Route`)::
 ``s`` station, ``d`` lateral offset (left +), ``psi`` heading relative to the
 route, ``vy``/``r`` lateral velocity and yaw rate, ``vx`` speed, ``z_int`` the
 integral of the speed error, ``fuel_ml`` fuel burnt, ``t`` time since the plan
-started.
+started, ``steer`` the front wheels' steer angle (lagging the command).
 
 * **Longitudinal**: ``m_eq·v̇x = F_x − F_yf·sin δ + m·vy·r − c_rr·m·g·cos θ −
   ½ρ·c_dA·vx² − m·g·sin θ``; the traction force is bounded by engine power and
@@ -15,11 +15,12 @@ started.
 * **Lateral**: single-track model with tyre forces ``μF_z·tanh(Cα/(μF_z))``
   (linear with cornering stiffness ``C`` for small slip, saturating at the
   friction limit).
-* **Control** (sampled, held over a step): steer angle by LQR on the lateral
-  error model (Rajamani, Vehicle Dynamics and Control, 2nd ed. 2012, §3.2),
-  gains from :func:`control.lqr` on a speed grid and interpolated linearly
-  (gain scheduling), plus the curvature feed-forward that cancels the
-  steady-state error; traction/brake force by LQR on ``[∫e_v, e_v]`` (integral
+* **Steering actuator**: first-order lag ``δ̇ = (δ_cmd − δ)/τ``.
+* **Control** (sampled, held over a step): steer command by LQR on the lateral
+  error model (Rajamani, Vehicle Dynamics and Control, 2nd ed. 2012, §3.2)
+  augmented with the actuator lag, gains from :func:`control.lqr` on a speed
+  grid and interpolated linearly (gain scheduling), plus the curvature
+  feed-forward that cancels the steady-state error; traction/brake force by LQR on ``[∫e_v, e_v]`` (integral
   action) plus the resistance feed-forward.
 * **Fuel**: Willans line ``P_fuel = (P_e + P_0)/e`` with ``P_e`` the wheel
   power over the driveline efficiency plus auxiliaries, overrun fuel cut-off
@@ -51,7 +52,7 @@ __all__ = ["STATE", "OUTPUT", "Layout", "lateral_error_model", "lateral_gains", 
            "closed_loop", "fuel_rate_ml_s"]
 
 #: state names, in order
-STATE = ("s", "d", "psi", "vy", "r", "vx", "z_int", "fuel_ml", "t")
+STATE = ("s", "d", "psi", "vy", "r", "vx", "z_int", "fuel_ml", "t", "steer")
 #: per-step output names, in order
 OUTPUT = ("a_lat", "steer", "force", "e_lat", "fuel_rate")
 
@@ -110,10 +111,14 @@ class Layout:
         return 15 + 2 * self.window
 
 
-def lateral_error_model(truck: TruckParams, v: float) -> tuple[np.ndarray, np.ndarray]:
+def lateral_error_model(truck: TruckParams, v: float,
+                        actuator: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """``A, B`` of the lateral error dynamics ``[e1, ė1, e2, ė2]`` at speed ``v``.
 
-    Rajamani (2012), eq. 3.29, with axle cornering stiffnesses ``Cf, Cr``.
+    Rajamani (2012), eq. 3.29, with axle cornering stiffnesses ``Cf, Cr``. With
+    ``actuator`` the state gains the steer angle's departure from its
+    feed-forward, ``δ̃``, driven through the actuator lag: the input is then the
+    steer command (``δ̃̇ = (u − δ̃)/τ``).
     """
     m, iz = truck.mass_kg, truck.yaw_inertia_kgm2
     cf, cr, lf, lr = truck.cf_n_per_rad, truck.cr_n_per_rad, truck.lf_m, truck.lr_m
@@ -125,18 +130,26 @@ def lateral_error_model(truck: TruckParams, v: float) -> tuple[np.ndarray, np.nd
          -(cf * lf**2 + cr * lr**2) / (iz * v)],
     ])
     b = np.array([[0.0], [cf / m], [0.0], [cf * lf / iz]])
-    return a, b
+    if not actuator:
+        return a, b
+    tau = truck.steer_lag_s
+    a5 = np.zeros((5, 5))
+    a5[:4, :4], a5[:4, 4:], a5[4, 4] = a, b, -1.0 / tau
+    b5 = np.zeros((5, 1))
+    b5[4, 0] = 1.0 / tau
+    return a5, b5
 
 
 def lateral_gains(truck: TruckParams, ctrl: ControlParams,
                   speeds: np.ndarray = SPEED_GRID) -> np.ndarray:
-    """LQR gains ``(len(speeds), 4)`` of the lateral error model (python-control)."""
+    """LQR gains ``(len(speeds), 5)`` of the lateral error model with the steering
+    actuator (python-control); the steer angle's own weight is zero."""
     import control  # noqa: PLC0415
 
-    q = np.diag(ctrl.lateral_q)
+    q = np.diag([*ctrl.lateral_q, 0.0])
     out = []
     for v in speeds:
-        a, b = lateral_error_model(truck, float(v))
+        a, b = lateral_error_model(truck, float(v), actuator=True)
         k, _, _ = control.lqr(a, b, q, np.array([[ctrl.lateral_r]]))
         out.append(np.asarray(k).ravel())
     return np.array(out)
@@ -195,9 +208,9 @@ def closed_loop(st: Settings, steps: int, window: int = 40) -> tuple[ca.Function
     """The closed loop over ``steps`` control steps, as one CasADi function.
 
     Returns ``(F, layout)`` with ``F(x0, p) → (X, Y)``: ``X`` the states after
-    each step ``(9, steps)``, ``Y`` the outputs ``(5, steps)``
+    each step ``(10, steps)``, ``Y`` the outputs ``(5, steps)``
     (:data:`OUTPUT`: lateral acceleration, steer angle, force, lateral error to
-    the plan, fuel rate). Built once per settings (cached).
+    the plan, fuel rate; at the start of each step). Built once per settings (cached).
     """
     tr, eng, ctl = st.truck, st.engine, st.control
     lay = Layout(window)
@@ -212,7 +225,7 @@ def closed_loop(st: Settings, steps: int, window: int = 40) -> tuple[ca.Function
 
     x = ca.SX.sym("x", len(STATE))
     p = ca.SX.sym("p", lay.size)
-    s, d, psi, vy, r, vx, z_int, _fuel, t = (x[i] for i in range(len(STATE)))
+    s, d, psi, vy, r, vx, z_int, _fuel, t, delta = (x[i] for i in range(len(STATE)))
 
     def route_at(si):
         u = (si - p[lay.s0]) / p[lay.ds]
@@ -234,9 +247,20 @@ def closed_loop(st: Settings, steps: int, window: int = 40) -> tuple[ca.Function
     e1dot = vy + vxs * e2
     e2dot = r - vxs * kap_traj
     kk = _schedule(vxs, SPEED_GRID, lat_k)
-    steer_fb = -(kk[0] * e1 + kk[1] * e1dot + kk[2] * e2 + kk[3] * e2dot)
-    steer_ff = kap_traj * (wheelbase + k_us * vxs**2
-                           - kk[2] * (lr - lf * m * vxs**2 / (cr * wheelbase)))
+    # feed-forward that zeroes the steady-state e1 (Rajamani eq. 3.45); in steady state the
+    # lag state settles at δ̃ = −K4·e/(1 + k5), i.e. the heading gain acts as k3/(1 + k5)
+    k3 = kk[2] / (1.0 + kk[4])
+    # preview: the feed-forward steers for the path one actuator time constant ahead
+    s_ahead = s + vxs * tr.steer_lag_s
+    kap_a, _ = route_at(s_ahead)
+    sig_a = ca.fmin(ca.fmax(s_ahead - p[lay.s_plan], 0.0), p[lay.length])
+    d_a = q[0] + sig_a * (q[1] + sig_a * (q[2] + sig_a * (q[3] + sig_a * (q[4] + sig_a * q[5]))))
+    d2_a = 2 * q[2] + sig_a * (6 * q[3] + sig_a * (12 * q[4] + sig_a * 20 * q[5]))
+    kap_ff = kap_a / (1.0 - kap_a * d_a) + d2_a
+    steer_ff = kap_ff * (wheelbase + k_us * vxs**2
+                         - k3 * (lr - lf * m * vxs**2 / (cr * wheelbase)))
+    steer_fb = -(kk[0] * e1 + kk[1] * e1dot + kk[2] * e2 + kk[3] * e2dot
+                 + kk[4] * (delta - steer_ff))
     steer = ca.fmin(ca.fmax(steer_fb + steer_ff, -tr.max_steer_rad), tr.max_steer_rad)
 
     c = p[lay.speed]
@@ -257,8 +281,8 @@ def closed_loop(st: Settings, steps: int, window: int = 40) -> tuple[ca.Function
     # -- plant --
     xs = ca.SX.sym("xs", len(STATE))
     us = ca.SX.sym("us", 4)
-    s_, d_, psi_, vy_, r_, vx_, _z, _f, _t = (xs[i] for i in range(len(STATE)))
-    dl, fx, integrate, vr = us[0], us[1], us[2], us[3]
+    s_, d_, psi_, vy_, r_, vx_, _z, _f, _t, dl = (xs[i] for i in range(len(STATE)))
+    cmd, fx, integrate, vr = us[0], us[1], us[2], us[3]
     kap_, grd_ = route_at(s_)
     vxp = ca.fmax(vx_, 0.5)
     af = dl - ca.atan2(vy_ + lf * r_, vxp)
@@ -279,15 +303,16 @@ def closed_loop(st: Settings, steps: int, window: int = 40) -> tuple[ca.Function
         integrate * (vx_ - vr),
         fuel_rate_ml_s(fx, vx_, tr, eng, lib=ca),
         1.0,
+        (cmd - dl) / tr.steer_lag_s,
     )
     pw = ca.vertcat(us, p)
     integ = ca.integrator("truck", "rk", {"x": xs, "p": pw, "ode": ode}, 0.0, ctl.step_s,
                           {"number_of_finite_elements": 1, "simplify": True})
     x_next = integ(x0=x, p=ca.vertcat(u, p))["xf"]
-    a_lat = (mu * fzf * ca.tanh(cf * (steer - ca.atan2(vy + lf * r, vxs)) / (mu * fzf))
-             * ca.cos(steer)
+    a_lat = (mu * fzf * ca.tanh(cf * (delta - ca.atan2(vy + lf * r, vxs)) / (mu * fzf))
+             * ca.cos(delta)
              + mu * fzr * ca.tanh(cr * (-ca.atan2(vy - lr * r, vxs)) / (mu * fzr))) / m
-    y = ca.vertcat(a_lat, steer, force, e1, fuel_rate_ml_s(force, vx, tr, eng, lib=ca))
+    y = ca.vertcat(a_lat, delta, force, e1, fuel_rate_ml_s(force, vx, tr, eng, lib=ca))
     step = ca.Function("truck_step", [x, p], [x_next, y])
     chunk = step.mapaccum("truck_chunk", steps)
     return chunk, lay

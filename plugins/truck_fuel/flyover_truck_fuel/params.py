@@ -43,7 +43,8 @@ def _build(cls, d: Mapping[str, Any]):
 
 @dataclass(frozen=True)
 class TruckParams:
-    """40 t articulated truck: longitudinal resistances and a lumped single-track model."""
+    """40 t articulated truck: longitudinal resistances, a lumped single-track model and
+    its steering actuator (first-order lag)."""
 
     mass_kg: float
     rotating_mass_factor: float
@@ -59,6 +60,7 @@ class TruckParams:
     cornering_coefficient_per_rad: float
     tyre_friction: float
     max_steer_rad: float
+    steer_lag_s: float
     min_turn_radius_m: float
 
     @property

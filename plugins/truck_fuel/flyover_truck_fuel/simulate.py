@@ -29,7 +29,7 @@ __all__ = ["Drive", "RampSummary", "drive", "ramp_summary"]
 
 log = logging.getLogger(__name__)
 
-_S, _D, _PSI, _VY, _R, _VX, _Z, _FUEL, _T = range(len(STATE))
+_S, _D, _PSI, _VY, _R, _VX, _Z, _FUEL, _T, _STEER = range(len(STATE))
 _WINDOW_DS = 1.0
 
 
@@ -37,7 +37,7 @@ _WINDOW_DS = 1.0
 class Drive:
     """A driven route: per control step time, state and outputs.
 
-    ``x`` is ``(9, n)`` (:data:`~flyover_truck_fuel.model.STATE`, with ``t``
+    ``x`` is ``(10, n)`` (:data:`~flyover_truck_fuel.model.STATE`, with ``t``
     the time since the start), ``y`` is ``(5, n)``
     (:data:`~flyover_truck_fuel.model.OUTPUT`). ``completed`` is False with a
     ``reason`` when the drive stopped early.

@@ -71,6 +71,7 @@ def test_lateral_lqr_matches_the_scalar_closed_form_and_stabilises_every_speed(s
     assert float(k[0, 0]) == pytest.approx((a + math.sqrt(a * a + b * b * q / r)) / b, rel=1e-9)
     speeds = np.array([2.0, 5.0, 10.0, 20.0])
     gains = lateral_gains(st.truck, st.control, speeds)
+    assert gains.shape == (4, 5)
     for v, kk in zip(speeds, gains):
-        am, bm = lateral_error_model(st.truck, float(v))
+        am, bm = lateral_error_model(st.truck, float(v), actuator=True)
         assert np.linalg.eigvals(am - bm @ kk[None, :]).real.max() < 0
