@@ -72,7 +72,9 @@ def test_ramp_route_follows_the_lane_centre_of_a_catalog_ramp(st, j1_geometry):
         assert (route.d_pref[0] > 0) == start.endswith("R")       # leaving rightwards
 
 
-def test_tracking_error_stays_small_on_catalog_ramps(st, j1_geometry):
+@pytest.mark.parametrize("steer_lag_s", [0.1, 0.4])
+def test_tracking_error_stays_small_on_catalog_ramps(j1_geometry, steer_lag_s):
+    st = settings({"truck": {"steer_lag_s": steer_lag_s}})
     for ramp in j1_geometry.ramps:
         route = ramp_route(j1_geometry, ramp, st.route)
         s = ramp_summary(route, drive(route, st))
