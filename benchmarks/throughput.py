@@ -9,23 +9,25 @@ For ``--samples`` interchanges of every class under ``ROOT/interchanges`` (the
 experiment's own seeded choice; ``ROOT/classes.parquet`` names the classes) and
 every density of the config (``--configfile``, default config/config.yaml):
 
-* one line per run (throughput, stable window, counts, wall seconds);
-* per class and density: median and p95 wall seconds of a run, mean throughput,
+* one line per run (throughput, stable window, counts, CPU and wall seconds);
+* per class and density: median and p95 CPU seconds of a run (= wall on an idle
+  core; CPU is what a shared machine cannot distort), mean throughput,
   teleports (wrong lane) and collisions;
 * ``--compare N``: N runs (interchanges at the highest density, the costliest)
   through libsumo in-process and through the ``sumo`` binary on the same network,
-  route file, seed and options: wall seconds of each and libsumo's overhead, and
+  route file, seed and options: CPU seconds of each and libsumo's overhead, and
   whether they inserted and arrived the same vehicles;
 * ``--step-check N``: N runs at step length 0.5 s against the config's (1 s):
   throughput and wall (a setting for speed must not change the throughput);
 * the cost of the default experiment (``samples_per_class`` per class) and of the
-  paper's (20 per class, config/paper.yaml) on 2 cores, from the mean wall per
+  paper's (20 per class, config/paper.yaml) on 2 cores, from the mean CPU per
   interchange (all densities) measured here.
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import subprocess
 import tempfile
@@ -57,24 +59,26 @@ def run_one(net, flows, d, seed, s):
     return res, w
 
 
-def binary_run(net, flows, d, seed, s) -> tuple[float, int, int]:
-    """Wall seconds of the sumo binary on the same files and options; inserted, arrived."""
+def binary_run(net, flows, d, seed, s) -> tuple[float, float, int, int]:
+    """Wall and CPU seconds of the sumo binary on the same files and options; inserted, arrived."""
     with tempfile.TemporaryDirectory() as tmp:
         routes = Path(tmp) / "demand.rou.xml"
         routes.write_text(routes_xml(flows, d, s), encoding="utf-8")
         stat = Path(tmp) / "stats.xml"
         cmd = [sumolib.checkBinary("sumo"), *sumo_args(net, routes, seed, s, Path(tmp) / "log"),
                "--statistic-output", str(stat)]
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
         subprocess.run(cmd, check=True, capture_output=True)
         wall = time.perf_counter() - t0
+        c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime)
         text = stat.read_text()
     import re
 
     ins = int(re.search(r'<vehicles [^>]*inserted="(\d+)"', text)[1])
     arr = int(re.search(r'<vehicleTripStatistics [^>]*count="(\d+)"', text)[1]) \
         if 'vehicleTripStatistics' in text else -1
-    return wall, ins, arr
+    return wall, cpu, ins, arr
 
 
 def main() -> None:
@@ -116,8 +120,8 @@ def main() -> None:
             for d in s.densities:
                 seed = run_seed(s.seed, c, smp, d)
                 res, w = run_one(net, flows, d, seed, s)
-                t_ic += res.wall_s
-                walls[(c, d)].append(res.wall_s)
+                t_ic += res.cpu_s
+                walls[(c, d)].append(res.cpu_s)
                 tps[(c, d)].append(w.throughput_veh_h)
                 wl = res.teleport_reasons.get("wrong lane", 0)
                 b = bad[(c, d)]
@@ -130,9 +134,10 @@ def main() -> None:
                       f"{w.stable_from_s:5.0f} s {'balanced' if w.balanced else 'NOT balanced'}; "
                       f"in {int(res.entered.sum())} out {int(res.left.sum())} not inserted "
                       f"{res.not_inserted} teleports {res.teleports} ({res.teleport_reasons}) "
-                      f"collisions {res.collisions}; {res.wall_s:.2f} s", flush=True)
+                      f"collisions {res.collisions}; cpu {res.cpu_s:.2f} s wall {res.wall_s:.2f} s",
+                      flush=True)
             per_ic.append(t_ic)
-    print("\nper class and density: wall s per run (median / p95), mean throughput veh/h, "
+    print("\nper class and density: CPU s per run (median / p95), mean throughput veh/h, "
           "teleports (wrong lane), collisions")
     for (c, d), w in sorted(walls.items(), key=lambda t: (names.get(t[0][0], t[0][0]), t[0][1])):
         b = bad[(c, d)]
@@ -143,8 +148,9 @@ def main() -> None:
     if per_ic:
         mean_ic = float(np.mean(per_ic))
         n_cls = len(by_class)
-        print(f"\nall runs: median {statistics.median(allw):.2f} s, p95 {p95(allw):.2f} s, "
-              f"{len(allw)} runs; mean {mean_ic:.1f} s per interchange (all densities)")
+        print(f"\nall runs (CPU s; wall = CPU on an idle core): median {statistics.median(allw):.2f}"
+              f" s, p95 {p95(allw):.2f} s, {len(allw)} runs; mean {mean_ic:.1f} s per interchange "
+              "(all densities)")
         for label, kk in (("default", s.samples_per_class), ("paper", 20)):
             n = sum(min(kk, len(v)) if kk else len(v) for v in by_class.values())
             print(f"  {label:8s} ({kk} per class, {n} interchanges, {n * len(s.densities)} runs of "
@@ -156,12 +162,13 @@ def main() -> None:
         cmp_runs = [r for r in runs if r[2] == top][: args.compare]
         over = []
         for c, smp, d, net, flows, seed in cmp_runs:
-            tb, ins_b, arr_b = binary_run(net, flows, d, seed, s)
+            tb, cb, ins_b, arr_b = binary_run(net, flows, d, seed, s)
             res, _ = run_one(net, flows, d, seed, s)
             ins_l, arr_l = int(res.entered.sum()), int(res.left.sum())
-            over.append(res.wall_s / tb - 1)
-            print(f"  {names.get(c, c):18s} {smp:3d} {d:6.0f}: libsumo {res.wall_s:6.2f} s, "
-                  f"sumo {tb:6.2f} s, overhead {100 * over[-1]:+5.1f} %; inserted {ins_l}/{ins_b}"
+            over.append(res.cpu_s / cb - 1)
+            print(f"  {names.get(c, c):18s} {smp:3d} {d:6.0f}: CPU libsumo {res.cpu_s:6.2f} s, "
+                  f"sumo {cb:6.2f} s, overhead {100 * over[-1]:+5.1f} % (wall {res.wall_s:.2f} vs "
+                  f"{tb:.2f} s); inserted {ins_l}/{ins_b}"
                   f" arrived {arr_l}/{arr_b} {'same' if (ins_l, arr_l) == (ins_b, arr_b) else 'DIFFER'}")
         print(f"  median overhead {100 * statistics.median(over):+.1f} %")
     if args.step_check:
@@ -174,7 +181,7 @@ def main() -> None:
             r2, w2 = run_one(net, flows, d, seed, half)
             print(f"  {names.get(c, c):18s} {smp:3d} {d:6.0f}: {w1.throughput_veh_h:7.0f} vs "
                   f"{w2.throughput_veh_h:7.0f} veh/h ({100 * (w2.throughput_veh_h / w1.throughput_veh_h - 1):+.1f} %), "
-                  f"wall {r1.wall_s:.2f} vs {r2.wall_s:.2f} s")
+                  f"CPU {r1.cpu_s:.2f} vs {r2.cpu_s:.2f} s")
 
 
 if __name__ == "__main__":

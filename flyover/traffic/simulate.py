@@ -57,8 +57,8 @@ class RunResult:
         ``reason -> count``: ``wrong lane``, ``jam``, ``yield``, ``collision``.
     collisions
         Collisions SUMO detected.
-    wall_s
-        Wall time of the run (start to close).
+    wall_s, cpu_s
+        Wall and CPU (this process) seconds of the run, from start to close.
     """
 
     interval_s: float
@@ -71,6 +71,7 @@ class RunResult:
     teleport_reasons: dict[str, int] = field(default_factory=dict)
     collisions: int = 0
     wall_s: float = 0.0
+    cpu_s: float = 0.0
 
 
 def sumo_args(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
@@ -110,7 +111,7 @@ def simulate(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
     entered = np.zeros(n_int, dtype=np.int64)
     left = np.zeros(n_int, dtype=np.int64)
     loaded = teleports = collisions = 0
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with tempfile.TemporaryDirectory(prefix="flyover-sumo-") as tmp:
         elog = Path(tmp) / "sumo.log"
         try:
@@ -137,9 +138,9 @@ def simulate(net: str | os.PathLike, routes: str | os.PathLike, seed: int,
         finally:
             _close(libsumo)
         reasons = _reasons(elog)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     return RunResult(float(settings.interval_s), entered, left, int(loaded), int(loaded - departed),
-                     int(running), int(teleports), reasons, int(collisions), wall)
+                     int(running), int(teleports), reasons, int(collisions), wall, cpu)
 
 
 def _close(libsumo) -> None:
