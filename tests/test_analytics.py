@@ -80,6 +80,14 @@ def test_fuel_by_class_joins_class_names_and_takes_completed_rows(results):
     assert by[("trumpet", "level")]["median_ml_per_km"] is None  # not completed: no figure
 
 
+def test_fuel_totals_sum_litres_per_class_over_completed_ramps(results):
+    rows = {r["class_name"]: r for r in
+            query(NAMED_QUERIES["fuel-totals"].sql, results).to_pylist()}
+    assert rows["j1"]["ramps"] == 3 and rows["j1"]["litres"] == 3.0   # 1400 + 0 + 1600 ml
+    assert rows["j1"]["ml_per_km"] == 1000.0
+    assert rows["trumpet"]["ramps"] == 1                               # one not completed
+
+
 def test_fuel_grid_groups_by_the_ramps_target_radius_and_slope(results):
     rows = query(NAMED_QUERIES["fuel-grid"].sql, results).to_pylist()
     cells = {(r["radius_m"], r["slope_pct"], r["direction"]): r["mean_ml_per_km"]

@@ -37,6 +37,18 @@ NAMED_QUERIES: dict[str, NamedQuery] = {q.name: q for q in (
         GROUP BY ALL ORDER BY n.class_name, f.direction
         """),
     NamedQuery(
+        "fuel-totals",
+        "truck fuel per class over all its ramps: ramps, ramp-km, litres, ml/km",
+        f"""
+        SELECT n.class_name, f.class_id, count(*) AS ramps,
+               round(sum(f.length_m) / 1000, 1) AS ramp_km,
+               round(sum(f.fuel_ml) / 1000, 2) AS litres,
+               round(1000 * sum(f.fuel_ml) / sum(f.length_m)) AS ml_per_km
+        FROM fuel f LEFT JOIN {_CLASS_NAMES} n USING (class_id)
+        WHERE f.completed
+        GROUP BY ALL ORDER BY ml_per_km DESC
+        """),
+    NamedQuery(
         "fuel-by-direction",
         "truck fuel over the whole catalog by ramp direction (up, level, down)",
         """
