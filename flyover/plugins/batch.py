@@ -32,6 +32,7 @@ from flyover.errors import FlyoverError
 from flyover.geometry.model import read_geometry
 from flyover.plugins.api import PluginError, plugin_config
 from flyover.plugins.registry import installed_plugins, load_plugin
+from flyover.topology.io import file_mode
 
 __all__ = ["PARTITION_KEYS", "PluginRun", "ClassRun", "run_plugins_on_class", "write_partition",
            "partition_path"]
@@ -81,9 +82,7 @@ def _write_atomic(table: pa.Table, path: Path) -> None:
     os.close(fd)
     try:
         pq.write_table(table, tmp, compression="zstd")
-        mask = os.umask(0o022)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
+        os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -84,3 +84,14 @@ def test_hbefa4_cross_check_on_flat_and_grades(st):
     assert 1.0 < checks[4.0].ratio < 1.25
     assert 0.5 < checks[0.0].ratio < 0.7
     assert checks[-4.0].ours_ml_per_km == 0.0 and not math.isnan(checks[-4.0].ratio)
+
+
+def test_interchange_command_prints_one_row_per_ramp(j1_geometry, tmp_path, capsys):
+    from flyover.geometry.model import write_geometry
+
+    path = tmp_path / "geometry.json"
+    write_geometry(j1_geometry, path)
+    assert cli_main(["interchange", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[:2] == ["ramp", "direction"]
+    assert [ln.split()[0] for ln in lines[1:]] == [r.id for r in j1_geometry.ramps]
