@@ -95,3 +95,14 @@ def test_interchange_command_prints_one_row_per_ramp(j1_geometry, tmp_path, caps
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].split()[:2] == ["ramp", "direction"]
     assert [ln.split()[0] for ln in lines[1:]] == [r.id for r in j1_geometry.ramps]
+
+
+def test_a_malformed_ramp_is_a_row_with_the_reason(j1_geometry):
+    from dataclasses import replace
+
+    broken = replace(j1_geometry.ramps[0], elevation=())
+    g = replace(j1_geometry, ramps=(broken, *j1_geometry.ramps[1:2]))
+    rows = TruckFuelPlugin().evaluate(g, {})
+    assert rows[0]["completed"] is False and rows[0]["reason"].startswith("no route")
+    assert rows[0]["direction"] is None
+    assert rows[1]["completed"] is True
