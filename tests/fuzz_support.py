@@ -260,7 +260,7 @@ def _paths(doc, prefix=()):
 @st.composite
 def mutated_doc(draw, docs: list, words: list[str] = ()):
     """One of ``docs`` (parsed YAML) with 1-4 data mutations: a value replaced, a key
-    deleted or added."""
+    deleted, added or renamed."""
     doc = copy.deepcopy(draw(st.sampled_from(docs)))
     for _ in range(draw(st.integers(1, 4))):
         paths = [p for p, _ in _paths(doc) if p]
@@ -270,8 +270,10 @@ def mutated_doc(draw, docs: list, words: list[str] = ()):
         parent = doc
         for k in path[:-1]:
             parent = parent[k]
-        op = draw(st.sampled_from(["replace", "replace", "delete", "add"]))
-        if op == "replace":
+        op = draw(st.sampled_from(["replace", "replace", "delete", "add", "rename"]))
+        if op == "rename" and isinstance(parent, dict):  # same value under a hostile key
+            parent[draw(hostile_text(words))] = parent.pop(path[-1])
+        elif op == "replace":
             parent[path[-1]] = draw(json_values(words))
         elif op == "delete":
             del parent[path[-1]]

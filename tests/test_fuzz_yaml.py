@@ -16,7 +16,7 @@ import yaml
 from hypothesis import given
 from hypothesis import strategies as st
 
-from flyover.errors import InputFormatError, UnsafeNameError
+from flyover.errors import InputFormatError, TopologyError, UnsafeNameError
 from flyover.topology.catalog import catalog_dir
 from flyover.topology.io import read_topologies, read_yaml_spec
 from tests.fuzz_support import (
@@ -139,3 +139,19 @@ def test_city_import_of_a_path_name_writes_nothing_outside(tmp_path):
     assert [i["interchange"] for i in index["interchanges"]] == ["j1"]
     assert index["rejected"][0]["element"] == "'../../../../x'"
     assert not list(tmp_path.rglob("x.graphml")) and not Path("/x.graphml").exists()
+
+
+@pytest.mark.parametrize("where", ["expressway", "ramp"])
+def test_control_characters_in_ids_are_refused_at_read_not_crash_the_import(tmp_path, where):
+    """Found by the long fuzz run: YAML escapes put control characters into ids, which GraphML
+    cannot hold; the import crashed writing them (ValueError from lxml)."""
+    exp, ramp = ('"B\\x08"', "r1") if where == "expressway" else ("B", '"r\\x01"')
+    path = tmp_path / "ctrl.yaml"
+    path.write_text(f"expressways: {{A: [A1, A2], {exp}: [B1, B2]}}\n"
+                    f"ramps:\n  {ramp}: {{from: A1 right, to: B1 right}}\n  r2: {{from: B2 right, to: A2 right}}\n")
+    with pytest.raises(TopologyError, match="must be printable text") as info:
+        read_yaml_spec(path)
+    assert_names_file(info.value, path)
+    with sandbox() as root:
+        index = import_stays_inside([path], root)
+    assert not index["interchanges"] and "printable" in index["rejected"][0]["reason"]
