@@ -25,6 +25,9 @@ STAGE_CLIS = (
     "flyover.sampling.cli",
     "flyover.geometry.cli",
     "flyover.opendrive.cli",
+    "flyover.traffic.cli",
+    "flyover.plugins.cli",
+    "flyover.analytics.cli",
     "flyover.summary",
 )
 

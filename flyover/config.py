@@ -11,6 +11,7 @@ import jsonschema
 import yaml
 
 from flyover.errors import ConfigError
+from flyover.safe_yaml import load_yaml
 
 __all__ = ["schema", "validate_config", "load_config", "DEFAULT_CONFIG"]
 
@@ -52,12 +53,34 @@ def validate_config(config: dict[str, Any], source: str | None = None) -> dict[s
     'config/cities'
     """
     validator = _with_defaults(jsonschema.Draft202012Validator)(schema())
-    errors = sorted(validator.iter_errors(config), key=lambda e: list(e.absolute_path))
+    if not isinstance(config, dict):
+        raise ConfigError(f"the configuration must be a mapping, not a {type(config).__name__}",
+                          source=source, element="(top level)")
+    bad = next((k for k in _keys(config) if not isinstance(k, str)), None)
+    if bad is not None:  # YAML allows any key; the schema's patterns and names need text
+        raise ConfigError(f"keys must be text, got {bad!r}"[:200], source=source,
+                          element="(top level)")
+    errors = sorted(validator.iter_errors(config), key=lambda e: [
+        (0, x, "") if isinstance(x, int) else (1, 0, str(x)) for x in e.absolute_path])
     if errors:
         err = errors[0]
         element = ".".join(map(str, err.absolute_path)) or "(top level)"
-        raise ConfigError(err.message, source=source, element=element)
+        message = (err.message.splitlines() or ["invalid"])[0]
+        raise ConfigError(message if len(message) <= 300 else message[:300] + "...",
+                          source=source, element=element[:200])
     return config
+
+
+def _keys(doc: Any):
+    """Every mapping key anywhere in ``doc`` (iteratively: no recursion limit)."""
+    stack = [doc]
+    while stack:
+        obj = stack.pop()
+        if isinstance(obj, dict):
+            yield from obj.keys()
+            stack.extend(obj.values())
+        elif isinstance(obj, list):
+            stack.extend(obj)
 
 
 def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
@@ -65,8 +88,7 @@ def load_config(path: str | os.PathLike | None = None) -> dict[str, Any]:
     p = Path(path) if path else DEFAULT_CONFIG
     if path is None and not p.exists():
         return validate_config({"seed": 20231024})
-    try:
-        doc = yaml.safe_load(p.read_text(encoding="utf-8")) or {}
-    except (OSError, yaml.YAMLError) as exc:
-        raise ConfigError(f"cannot read config: {exc}", source=str(p)) from None
+    doc = load_yaml(p, error=ConfigError)
+    if doc is None:  # an empty file: every default
+        doc = {}
     return validate_config(doc, str(p))

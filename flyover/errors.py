@@ -5,6 +5,13 @@ from __future__ import annotations
 __all__ = ["FlyoverError", "TopologyError", "InputFormatError", "ConfigError", "UnsafeNameError"]
 
 
+def _printable(text: str) -> str:
+    """``text`` with control characters (line breaks, tabs, NUL ...) escaped as in ``repr``."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
+
+
 class FlyoverError(Exception):
     """Base class: a problem with a user-supplied input.
 
@@ -25,10 +32,12 @@ class FlyoverError(Exception):
         super().__init__(self.one_line())
 
     def one_line(self) -> str:
-        where = self.source or "<memory>"
+        """``{source}: {element}: {reason}`` on one line (line breaks and other control
+        characters from the data are shown escaped, e.g. ``\\n``)."""
+        where = _printable(self.source or "<memory>")
         if self.element:
-            where += f": {self.element}"
-        return f"{where}: {self.reason}"
+            where += f": {_printable(str(self.element))}"
+        return f"{where}: {_printable(self.reason)}"
 
     def located(self, source: str) -> "FlyoverError":
         """Return the same error attributed to ``source`` if it had none."""

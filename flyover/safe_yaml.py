@@ -4,8 +4,9 @@
 broken file can still make it (or the code walking its result) fail in ways
 that are not a :class:`yaml.YAMLError`: dates such as ``2023-13-45``
 (``ValueError``), very deep nesting (``RecursionError``), bytes that are not
-UTF-8, a recursive alias (``&a [*a]``) and the YAML "billion laughs" (aliases
-of aliases that expand to an exponential number of values). :func:`load_yaml`
+UTF-8, a recursive alias (``&a [*a]``), the YAML "billion laughs" (aliases
+of aliases that expand to an exponential number of values) and flow brackets
+nested thousands deep (PyYAML's scanner is quadratic in the depth). :func:`load_yaml`
 turns every one of these into the caller's :class:`~flyover.errors.FlyoverError`
 naming the file.
 
@@ -22,6 +23,7 @@ Example
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -29,10 +31,25 @@ import yaml
 
 from flyover.errors import FlyoverError, InputFormatError
 
-__all__ = ["MAX_YAML_VALUES", "load_yaml"]
+__all__ = ["MAX_YAML_VALUES", "MAX_FLOW_DEPTH", "load_yaml"]
 
 #: most values (scalars, lists, mappings) a document may expand to, aliases counted each time used
 MAX_YAML_VALUES = 1_000_000
+
+#: deepest nesting of ``[`` / ``{`` (PyYAML's scanner takes time quadratic in it: 3000 levels took 7 s)
+MAX_FLOW_DEPTH = 100
+
+_BRACKETS = re.compile(r"[\[\]{}]")
+
+
+def _flow_depth(text: str) -> int:
+    """Deepest nesting of flow brackets in ``text`` (brackets in quotes and comments are
+    counted too: an upper bound)."""
+    depth = deepest = 0
+    for m in _BRACKETS.finditer(text):
+        depth = depth + 1 if m.group() in "[{" else max(depth - 1, 0)
+        deepest = max(deepest, depth)
+    return deepest
 
 
 def _expanded_size(doc: Any, limit: int) -> int:
@@ -102,6 +119,8 @@ def load_yaml(path: str | os.PathLike, *, error: type[FlyoverError] = InputForma
         raise error(f"not UTF-8 text (byte {exc.start})", source=src) from None
     except OSError as exc:
         raise error(f"cannot read: {exc.strerror or exc}", source=src) from None
+    if _flow_depth(text) > MAX_FLOW_DEPTH:
+        raise error(f"malformed YAML: [ ] or {{ }} nested more than {MAX_FLOW_DEPTH} deep", source=src)
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:

@@ -253,9 +253,17 @@ class XodrNetwork:
     source: str | None = None
 
 
+def _number(text: str, name: str) -> float:
+    """A finite number from an attribute (``nan``/``inf`` have no place in a road network)."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{name}={text!r} is not a finite number")
+    return value
+
+
 def _f(el, name: str, default: float = 0.0) -> float:
     v = el.get(name)
-    return float(v) if v is not None else default
+    return _number(v, name) if v is not None else default
 
 
 def _cubic(el, s_attr: str = "s") -> Cubic:
@@ -280,7 +288,7 @@ def _road(el) -> XodrRoad:
         child = next(iter(g), None)
         if child is None:
             continue
-        params = {k: float(v) for k, v in child.attrib.items() if k != "pRange"}
+        params = {k: _number(v, k) for k, v in child.attrib.items() if k != "pRange"}
         if child.tag == "paramPoly3":
             params["normalized"] = 0.0 if child.get("pRange") == "arcLength" else 1.0
         geoms.append(PlanGeometry(_f(g, "s"), _f(g, "x"), _f(g, "y"), _f(g, "hdg"), _f(g, "length"),
@@ -306,39 +314,63 @@ def _road(el) -> XodrRoad:
     return road
 
 
+def _parser() -> etree.XMLParser:
+    """An XML parser for files from anyone: no DTD loading, no entity expansion, no network,
+    libxml2's default limits on depth and size (no ``huge_tree``)."""
+    return etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True, huge_tree=False)
+
+
+def _junction(j) -> XodrJunction:
+    conns = []
+    for c in j.findall("connection"):
+        conns.append(XodrConnection(
+            c.get("id", ""), c.get("incomingRoad", ""),
+            c.get("connectingRoad") or c.get("linkedRoad") or "", c.get("contactPoint", "start"),
+            tuple((int(ll.get("from")), int(ll.get("to"))) for ll in c.findall("laneLink"))))
+    return XodrJunction(j.get("id"), j.get("type", "default"), tuple(conns))
+
+
 def read_xodr(path: str | os.PathLike | IO[bytes]) -> XodrNetwork:
     """Parse an OpenDRIVE file.
+
+    Entities are not expanded and no DTD or other file is fetched, whatever the
+    file declares.
 
     Raises
     ------
     InputFormatError
-        Naming the file (and road) when it is not readable OpenDRIVE.
+        Naming the file (and road or junction) when it is not readable OpenDRIVE.
     """
     src = None if hasattr(path, "read") else str(path)
     try:
-        root = etree.parse(path).getroot()
+        root = etree.parse(path, _parser()).getroot()
     except (OSError, etree.XMLSyntaxError) as exc:
-        raise InputFormatError(f"not readable XML: {exc}", source=src) from None
+        raise InputFormatError(f"not readable XML: {str(exc)[:300]}", source=src) from None
+    if root is None:
+        raise InputFormatError("not readable XML: no root element", source=src)
     _strip_ns(root)
     if root.tag != "OpenDRIVE" or root.find("header") is None:
         raise InputFormatError("not an OpenDRIVE file (root <OpenDRIVE> with <header>)", source=src)
     head = root.find("header")
-    net = XodrNetwork((int(head.get("revMajor", 1)), int(head.get("revMinor", 0))),
-                      dict(head.attrib), source=src)
+    try:
+        version = (int(head.get("revMajor", 1)), int(head.get("revMinor", 0)))
+    except ValueError as exc:
+        raise InputFormatError(f"malformed header version: {str(exc)[:200]}", source=src,
+                               element="header") from None
+    net = XodrNetwork(version, dict(head.attrib), source=src)
+    element = None
     try:
         for el in root.findall("road"):
+            element = f"road {el.get('id')}"
             r = _road(el)
             net.roads[r.id] = r
+        for j in root.findall("junction"):
+            element = f"junction {j.get('id')}"
+            junction = _junction(j)
+            net.junctions[junction.id] = junction
     except InputFormatError as exc:
-        raise exc.located(src or "<memory>")
-    except (TypeError, ValueError) as exc:
-        raise InputFormatError(f"malformed road: {exc}", source=src) from None
-    for j in root.findall("junction"):
-        conns = []
-        for c in j.findall("connection"):
-            conns.append(XodrConnection(
-                c.get("id", ""), c.get("incomingRoad", ""),
-                c.get("connectingRoad") or c.get("linkedRoad") or "", c.get("contactPoint", "start"),
-                tuple((int(ll.get("from")), int(ll.get("to"))) for ll in c.findall("laneLink"))))
-        net.junctions[j.get("id")] = XodrJunction(j.get("id"), j.get("type", "default"), tuple(conns))
+        raise exc.located(src or "<memory>") from None
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputFormatError(f"malformed {element.split()[0]}: {str(exc)[:200]}", source=src,
+                               element=element[:200]) from None
     return net

@@ -63,6 +63,17 @@ class ExportOptions:
         Length of the parent's and the ramp's pieces inside a diverge/merge junction.
     taper_length_m
         Length over which an auxiliary lane opens/closes, or lane widths change.
+    decel_length_m, accel_length_m
+        Full-width (parallel) length of the auxiliary lane before a diverge
+        (deceleration lane) and after a merge (acceleration lane), beside its
+        taper; shortened in proportion where the parent piece has no room.
+        Without them a lane-changing vehicle had ~70 m (mostly taper) to reach
+        or leave the ramp's lane, and SUMO jammed at every loop.
+    weave_max_m
+        A merge followed on the same side by a diverge, with as many ramp
+        lanes, at most this far apart (the parent piece between the two
+        junctions) keep one continuous auxiliary lane between them (a weaving
+        section, as on a cloverleaf), not two tapers.
     snap_tol_m
         Largest correction of a ramp end onto its attachment before failing.
     opendrive_minor
@@ -73,6 +84,9 @@ class ExportOptions:
     connecting_length_m: float = 15.0
     taper_length_m: float = 80.0
     snap_tol_m: float = 0.5
+    decel_length_m: float = 120.0
+    accel_length_m: float = 200.0
+    weave_max_m: float = 800.0
     opendrive_minor: int = 8
 
     def __post_init__(self) -> None:
@@ -421,27 +435,78 @@ def _fork_map(stub: _Element, ramp: _Element, side: str, inverse: bool = False):
     return lambda k: pairs.get(k)
 
 
-def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float):
-    """Lane sections of a normal piece: list of (s, laneOffset cubic, [(key, width cubic)])."""
+#: share of a piece the auxiliary lanes of its regions may take at most (the rest is plain:
+#: an auxiliary lane that closes right at the next junction made netconvert cut the
+#: joining ramp short)
+_FILL = 0.8
+
+
+def _weaves(piece: _Piece, L: float, opts: ExportOptions) -> bool:
+    """Does one auxiliary lane run from the merge at the piece's start to the diverge at its end?"""
+    r0, r1 = piece.start_region, piece.end_region
+    return (r0 is not None and r1 is not None and r0[0] == r1[0] == "aux" and r0[1:] == r1[1:]
+            and L <= opts.weave_max_m)
+
+
+def _region_lengths(piece: _Piece, L: float, opts: ExportOptions
+                    ) -> tuple[float, float, float, float, bool]:
+    """``(T0, T1, P0, P1, weave)``: taper and full-width lengths of a normal piece's regions.
+
+    An auxiliary lane runs full width for ``accel_length_m`` after a merge (start region)
+    and ``decel_length_m`` before a diverge (end region), beside its taper; a width
+    transition has the taper alone. Where the piece is shorter than what its regions ask
+    for, every length shrinks in the same proportion (without full-width parts this is
+    the former ``min(taper, L / regions)``).
+    """
+    r0, r1 = piece.start_region, piece.end_region
+    if _weaves(piece, L, opts):
+        return 0.0, 0.0, 0.0, 0.0, True
+    T = opts.taper_length_m
+    T0, T1 = (T if r0 else 0.0), (T if r1 else 0.0)
+    P0 = opts.accel_length_m if r0 is not None and r0[0] == "aux" else 0.0
+    P1 = opts.decel_length_m if r1 is not None and r1[0] == "aux" else 0.0
+    want = T0 + T1 + P0 + P1
+    # full lengths where they fit with a plain stretch beside them; else in proportion
+    f = min(1.0, L / want, _FILL * L / want if P0 or P1 else 1.0) if want > 0 else 1.0
+    return T0 * f, T1 * f, P0 * f, P1 * f, False
+
+
+def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
+                  P0: float = 0.0, P1: float = 0.0, weave: bool = False):
+    """Lane sections of a normal piece: list of (s, laneOffset cubic, [(key, width cubic)]).
+
+    A region's auxiliary lane runs full width for ``P0`` (after the start) or ``P1``
+    (before the end) beside its taper ``T0``/``T1``; ``weave``: one full-width
+    auxiliary lane over the whole piece.
+    """
     L = piece.s1 - piece.s0
     base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
-    secs = []
     r0, r1 = piece.start_region, piece.end_region
-    s_plain0, s_plain1 = (T0 if r0 else 0.0), (L - T1 if r1 else L)
+    if weave:
+        return [(0.0, _region_lanes(el, r0, 0.0, opening=False, sh=sh, full=True))]
+    secs = []
+    P0 = P0 if r0 else 0.0
+    P1 = P1 if r1 else 0.0
+    s_plain0, s_plain1 = (P0 + T0 if r0 else 0.0), (L - T1 - P1 if r1 else L)
     if r0:
-        secs.append((0.0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
+        if P0 > 1e-6:
+            secs.append((0.0, _region_lanes(el, r0, P0, opening=False, sh=sh, full=True)))
+        secs.append((P0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
     if s_plain1 - s_plain0 > 1e-6 or not (r0 or r1):
         secs.append((s_plain0, (_const(0.0), base + [(("sh",), _const(sh))])))
     if r1:
-        secs.append((L - T1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
+        secs.append((L - T1 - P1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
+        if P1 > 1e-6:
+            secs.append((L - P1, _region_lanes(el, r1, P1, opening=True, sh=sh, full=True)))
     return secs
 
 
-def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: float):
+def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: float,
+                  full: bool = False):
     kind = region[0]
     if kind == "aux":
         _, side, k, w = region
-        cub = _rising(w, T) if opening else _change(w, 0.0, T)
+        cub = _const(w) if full else (_rising(w, T) if opening else _change(w, 0.0, T))
         aux = [(("aux", j), cub) for j in range(1, k + 1)]
         base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
         if side == "R":
@@ -538,9 +603,8 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
                                                           for i in range(1, el.lanes + 1)]
                                              + [(("sh",), _const(sh))]))]
                 continue
-            n_reg = (p.start_region is not None) + (p.end_region is not None)
-            T = min(opts.taper_length_m, L / max(n_reg, 1))
-            layouts[p.road_id] = _lanes_layout(el, p, T, T, sh)
+            T0, T1, P0, P1, weave = _region_lengths(p, L, opts)
+            layouts[p.road_id] = _lanes_layout(el, p, T0, T1, sh, P0, P1, weave)
 
     def ids(rid_: int, which: int) -> dict[tuple, int]:
         secs = layouts[rid_]

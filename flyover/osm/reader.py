@@ -136,8 +136,8 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str]) -> 
                     if n.tag == "nd" and int(n.get("ref")) in needed:
                         net.ordinary.setdefault(int(n.get("ref")), {
                             k: tags[k] for k in ("highway", "ref", "name") if k in tags})
-    except ParseError as exc:
-        raise InputFormatError(f"malformed OSM XML: {exc}", source=src) from None
+    except (ParseError, LookupError) as exc:  # LookupError: a declared encoding Python does not know
+        raise InputFormatError(f"malformed OSM XML: {str(exc)[:300]}", source=src) from None
     except (TypeError, ValueError) as exc:
         raise InputFormatError(f"malformed OSM element: {exc}", source=src) from None
     if not saw_osm:

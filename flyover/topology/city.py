@@ -16,7 +16,7 @@ from flyover.errors import FlyoverError, TopologyError
 from flyover.topology.io import atomic_write, read_topologies, write_graphml
 from flyover.topology.names import check_name, child_path
 
-__all__ = ["import_city", "CITY_INDEX", "read_city_index"]
+__all__ = ["import_city", "CITY_INDEX", "read_city_index", "city_names"]
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +84,23 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
     index = {"city": city, "interchanges": interchanges, "rejected": rejected}
     atomic_write(outdir / CITY_INDEX, json.dumps(index, indent=2, sort_keys=True).encode())
     return index
+
+
+def city_names(cities_dir: str | os.PathLike, configured: Iterable[str] = ()) -> list[str]:
+    """The cities to build: ``configured`` if any, else every folder of ``cities_dir``
+    (hidden ones skipped), sorted; each must be a safe name (it becomes a folder name).
+
+    Raises
+    ------
+    UnsafeNameError
+        Naming the city folder (or ``cities_dir`` for a configured name) and the name.
+    """
+    configured = list(configured)
+    if configured:
+        return sorted(check_name(c, source=str(cities_dir), what="city name") for c in configured)
+    root = Path(cities_dir)
+    found = sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+    return [check_name(p.name, source=str(p), what="city name") for p in found]
 
 
 def read_city_index(outdir: str | os.PathLike) -> dict:

@@ -141,17 +141,25 @@ def write_graphml(topology: Topology, path: str | os.PathLike) -> None:
 def read_graphml(path: str | os.PathLike, name: str | None = None) -> Topology:
     """Read native or FLYOVER-dataset GraphML (detected from the attributes).
 
+    The topology's name is ``name``, else the graph's ``name`` attribute, else the
+    file name without suffix; it must be a safe name (:mod:`flyover.topology.names`).
+    FLYOVER-dataset nodes are keyed on their GraphML id (the dataset's ``name``
+    attribute can repeat within a file and is kept as a node attribute).
+
     Raises
     ------
     InputFormatError
         The file is not GraphML or follows neither schema.
+    UnsafeNameError
+        The name is not a safe name (it becomes a file name).
     TopologyError
         The topology breaks a model rule.
     """
     src = str(path)
     try:
         g = nx.read_graphml(path, force_multigraph=True)
-    except (ParseError, nx.NetworkXError, ValueError, KeyError) as exc:
+    except (ParseError, nx.NetworkXError, ValueError, KeyError, LookupError) as exc:
+        # LookupError: an XML declaration naming an unknown encoding
         raise InputFormatError(f"not readable as GraphML: {_first_line(exc)}", source=src) from None
     name = check_name(name or g.graph.get("name") or Path(path).stem, source=src)
     node_keys = set().union(*(d.keys() for _, d in g.nodes(data=True))) if g.nodes else set()
@@ -287,7 +295,20 @@ def _endpoint(item: Any) -> tuple[str, str, str | None] | None:
 
 
 def read_yaml_spec(path: str | os.PathLike) -> Topology:
-    """Read a YAML spec (format in the module docstring and the README)."""
+    """Read a YAML spec (format in the module docstring and the README).
+
+    The file is parsed by :func:`flyover.safe_yaml.load_yaml` (bounded work); the
+    name (``name:``, else the file name without suffix) must be a safe name.
+
+    Raises
+    ------
+    InputFormatError
+        Not UTF-8, malformed YAML, or not a spec (naming the key at fault).
+    UnsafeNameError
+        The name is not a safe name (it becomes a file name).
+    TopologyError
+        The topology breaks a model rule.
+    """
     src = str(path)
     doc = load_yaml(path, error=InputFormatError)
     return topology_from_spec(doc, src, default_name=Path(path).stem)

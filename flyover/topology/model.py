@@ -258,12 +258,17 @@ def _check_parts(roads: list[Road], ramps: list[Ramp], conns: list[Connection],
     for node, kind in [*((r.id, Kind.ROAD) for r in roads), *((r.id, Kind.RAMP) for r in ramps)]:
         if not isinstance(node, str) or not node:
             raise _fail("node id must be a non-empty string", source, repr(node))
+        if not node.isprintable():  # GraphML (XML) cannot hold control characters
+            raise _fail("node id must be printable text (no control characters)", source, repr(node))
         if node in kinds:
             raise _fail("duplicate node id", source, node)
         kinds[node] = kind
     for r in roads:
         if not r.expressway:
             raise _fail("road has no expressway", source, r.id)
+        if not r.expressway.isprintable():
+            raise _fail(f"expressway name {r.expressway!r} must be printable text (no control characters)",
+                        source, r.id)
         if r.lanes is not None and (isinstance(r.lanes, bool) or not isinstance(r.lanes, int) or r.lanes < 1):
             raise _fail(f"lanes must be a positive integer, got {r.lanes!r}"[:200], source, r.id)
     seen: set[tuple[str, str]] = set()
