@@ -13,6 +13,8 @@ include: "workflow/rules/topology.smk"
 include: "workflow/rules/sampling.smk"
 include: "workflow/rules/geometry.smk"
 include: "workflow/rules/export.smk"
+include: "workflow/rules/throughput.smk"
+include: "workflow/rules/plugins.smk"
 
 
 rule all:
@@ -25,6 +27,9 @@ rule all:
         "results/geometry.parquet",
         class_tables("export"),
         "results/validation.parquet",
+        "results/throughput.parquet",
+        "results/throughput_stats.parquet",
+        plugin_class_tables,
     default_target: True
 
 

@@ -87,6 +87,26 @@ def stage_status(results: str | os.PathLike = "results") -> list[StageStatus]:
             problems.append("failed: " + ", ".join(f"{c} {n}" for c, n in sorted(bad.items())))
         out.append(StageStatus(stage, len(per), len(samples), len(paths), n_classes,
                                tuple(problems), tables))
+
+    paths = sorted((root / "throughput").glob("c*.parquet"))
+    if paths:
+        rows = _read(paths, ["class_id", "sample", "ok", "flagged"])
+        problems = [f"{len(rows)} runs"]
+        if bad := sum(not r["ok"] for r in rows):
+            problems.append(f"{bad} failed")
+        if flagged := sum(bool(r["ok"] and r["flagged"]) for r in rows):
+            problems.append(f"{flagged} flagged (teleports or collisions)")
+        done = {(r["class_id"], r["sample"]) for r in rows}
+        out.append(StageStatus("throughput", len(done), len(done), len(paths), n_classes,
+                               tuple(problems), "results/throughput.parquet, "
+                                                "results/throughput_stats.parquet, results/figures/"))
+    for plugin in sorted(p for p in (root / "plugins").glob("*") if p.is_dir()):
+        paths = sorted(plugin.glob("c*.parquet"))
+        rows = _read(paths, ["class_id", "sample", "completed"])
+        done = {(r["class_id"], r["sample"]) for r in rows}
+        problems = [f"{sum(bool(r['completed']) for r in rows)}/{len(rows)} rows completed"]
+        out.append(StageStatus(plugin.name, len(done), len(samples), len(paths), n_classes,
+                               tuple(problems), f"results/plugins/{plugin.name}/, `flyover query`"))
     return out
 
 
@@ -97,7 +117,8 @@ def status_lines(results: str | os.PathLike = "results") -> list[str]:
         return [f"{results}: nothing built yet (run `./dev run`)"]
     classes = _read([root / "classes.parquet"], ["city", "class_id"])
     rejected = _read([root / "rejected.parquet"], ["source_file"])
-    lines = [f"{len(classes)} interchanges from {len({r['city'] for r in classes})} cities in "
+    n_cities = len({r["city"] for r in classes})
+    lines = [f"{len(classes)} interchanges from {n_cities} {'city' if n_cities == 1 else 'cities'} in "
              f"{len({r['class_id'] for r in classes})} classes; {len(rejected)} inputs rejected "
              "(results/classes.parquet, results/rejected.parquet)"]
     for s in stage_status(root):

@@ -44,6 +44,7 @@ def _workdir(root: Path) -> Path:
     cfg = yaml.safe_load((root / "config" / "config.yaml").read_text(encoding="utf-8"))
     cfg["cities"] = ["small"]
     cfg["sampling"]["t"] = 1
+    cfg["throughput"].update(samples_per_class=1, densities=[450, 1800], duration_s=900)
     (root / "config" / "config.yaml").write_text(yaml.safe_dump(cfg), encoding="utf-8")
     return root
 
@@ -76,8 +77,23 @@ def _jobs(log: str) -> list[tuple[str, str]]:
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     wd = _workdir(tmp_path_factory.mktemp("reference"))
-    snakemake(wd, "-j2", check=True)
+    run = snakemake(wd, "-j2", check=True)
+    (wd / "run.log").write_text(run.stderr, encoding="utf-8")
     return wd
+
+
+def test_the_run_reports_progress_per_batch_and_a_summary(reference):
+    log = (reference / "run.log").read_text(encoding="utf-8")
+    classes = sorted(p.stem for p in (reference / "results" / "features").glob("c*.parquet"))
+    for c in classes:
+        n = len(set(pq.read_table(reference / "results" / "features" / f"{c}.parquet")
+                    .column("sample").to_pylist()))
+        for stage in ("geometry", "export", "validation"):
+            assert f"flyover {stage} {c}: {n}/{n} interchanges" in log
+    summary = log[log.index("flyover: done"):]
+    assert "2 interchanges from 1 city in 2 classes" in summary
+    assert " interchanges pass every check  [results/validation.parquet]" in summary
+    assert "throughput  2/2 interchanges" in summary and "truck_fuel" in summary
 
 
 def test_the_main_job_builds_every_interchange_of_every_class(reference):

@@ -120,8 +120,9 @@ NAMED_QUERIES: dict[str, NamedQuery] = {q.name: q for q in (
         SELECT g.class_id, n.class_name, count(DISTINCT g.sample) AS interchanges,
                count(*) AS ramps, round(avg(g.ok::INT), 3) AS ok_share,
                round(median(g.length_m), 1) AS median_length_m,
-               round(median(g.seconds), 2) AS median_seconds
-        FROM geometry g LEFT JOIN {_CLASS_NAMES} n USING (class_id)
+               round(median(t.seconds), 2) AS median_seconds
+        FROM geometry g LEFT JOIN geometry_timing t USING (class_id, sample, ramp)
+             LEFT JOIN {_CLASS_NAMES} n USING (class_id)
         GROUP BY ALL ORDER BY n.class_name
         """),
     NamedQuery(

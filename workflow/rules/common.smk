@@ -13,7 +13,8 @@ validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 1
-EXPORT_VERSION = 2  # 2: one job per class
+# export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
+EXPORT_VERSION = 3
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 
 
@@ -114,3 +115,49 @@ def class_tables(stage):
 # 12: one job per class; fitting seconds in results/geometry_timing/ (geometry.parquet
 #     is the same bytes in every run)
 GEOMETRY_VERSION = 12
+
+
+# -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
+# 1: first version (flows per topology movement, stable window from the balance of N(t))
+THROUGHPUT_VERSION = 1
+
+
+def throughput_class_series(wildcards):
+    """Every class's entering/leaving time series."""
+    return expand("results/throughput/{class_id}/series.parquet", class_id=class_ids())
+
+
+# -- plugins (step 7, workflow/rules/plugins.smk) -----------------------------------------
+# 1: first version (generic plugin step; truck_fuel 0.1.0)
+PLUGINS_VERSION = 1
+
+
+wildcard_constraints:
+    plugin=r"[a-z][a-z0-9_]*",
+
+
+def plugin_names():
+    """The plugins the config asks for (keys of `plugins:`)."""
+    return sorted(config.get("plugins") or {})
+
+
+def plugin_version(wildcards):
+    """The installed version of a plugin's distribution (metadata only, nothing imported)."""
+    from flyover.plugins.registry import plugin_entry_points
+
+    for info in plugin_entry_points():
+        if info.name == wildcards.plugin:
+            return info.distribution_version
+    raise ValueError(f"plugin {wildcards.plugin!r} is configured but not installed "
+                     f"(`flyover plugins` lists what is)")
+
+
+def plugin_config(wildcards):
+    """A plugin's config section (the plugin fills its defaults and validates it)."""
+    return config["plugins"][wildcards.plugin] or {}
+
+
+def plugin_class_tables(wildcards):
+    """Every configured plugin's rows of every class."""
+    return expand("results/plugins/{plugin}/{class_id}.parquet", plugin=plugin_names(),
+                  class_id=class_ids())

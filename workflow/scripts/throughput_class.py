@@ -12,8 +12,9 @@ setup_logging(snakemake.log[0])
 class_id = snakemake.wildcards.class_id
 settings = ThroughputSettings.from_config(
     {"seed": snakemake.params.seed, "throughput": snakemake.params.throughput})
-listed = pq.read_table(snakemake.input.interchanges, columns=["sample"]).column("sample")
-chosen = select_samples(listed.to_pylist(), settings.samples_per_class, settings.seed, class_id)
+listed = sorted(set(pq.read_table(snakemake.input.interchanges, columns=["sample"])
+                    .column("sample").to_pylist()))  # the export table: rows per check
+chosen = select_samples(listed, settings.samples_per_class, settings.seed, class_id)
 logging.info("%s: %d of %d interchanges: %s", class_id, len(chosen), len(listed), chosen)
 nets = [(s, Path(f"results/interchanges/{class_id}/{s}/interchange.net.xml")) for s in chosen]
 rows = run_class(nets, class_id, settings, snakemake.output.table, snakemake.output.series)
