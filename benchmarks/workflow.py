@@ -4,8 +4,6 @@ Usage::
 
     .venv/bin/python benchmarks/workflow.py                 # everything below, in a temp clone
     .venv/bin/python benchmarks/workflow.py --keep DIR      # clone into DIR and keep it
-    .venv/bin/python benchmarks/workflow.py --before DIR    # also per-stage CPU of another run's
-                                                            # logs/benchmarks (e.g. the old layout)
 
 Steps (each printed with its wall time):
 
@@ -19,9 +17,10 @@ Steps (each printed with its wall time):
 5. a new city with one interchange (a class the catalog does not have): the job list, then
    the run.
 
-Then per stage the CPU seconds per interchange (from Snakemake's ``benchmark:`` files:
-``cpu_time`` of each job over the interchanges it handled) and the peak memory (``max_rss``)
-of any job.
+Then per stage of the main job the CPU seconds per interchange and the peak memory of any
+job, from the line every workflow script's log ends with (``resource usage: cpu_s=…
+children_cpu_s=… max_rss_mb=…``, :mod:`flyover.workflow_log`; Snakemake's own ``benchmark:``
+files sample the process tree and miss short child processes such as netconvert).
 """
 
 from __future__ import annotations
@@ -29,6 +28,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import resource
 import shutil
 import statistics
 import subprocess
@@ -70,32 +70,46 @@ def _jobs(dry_run_output: str) -> list[str]:
     return [ln.strip() for ln in m.group(1).splitlines()] if m else ["(nothing to be done)"]
 
 
+_USAGE = re.compile(r"resource usage: cpu_s=([\d.]+) children_cpu_s=([\d.]+) max_rss_mb=(\d+)")
+
+
 def _stage_costs(clone: Path) -> dict[str, tuple[float, int, float, int]]:
-    """stage → (CPU s, interchanges, peak max_rss MB, jobs), from logs/benchmarks."""
+    """stage → (CPU s of its jobs and their children, interchanges, peak RSS MB, jobs), from
+    the resource line every workflow script's log ends with (flyover.workflow_log)."""
     per_class = {}
     for p in (clone / "results" / "features").glob("c*.parquet"):
         per_class[p.stem] = len(set(pq.read_table(p, columns=["sample"]).column("sample").to_pylist()))
-    out = {}
-    for stage_dir in sorted(p for p in (clone / "logs" / "benchmarks").iterdir() if p.is_dir()):
-        cpu, n, rss, jobs = 0.0, 0, 0.0, 0
-        for tsv in stage_dir.rglob("*.tsv"):
-            head, *rows = tsv.read_text().splitlines()
-            cols = head.split("\t")
-            for row in rows:
-                vals = dict(zip(cols, row.split("\t")))
-                cpu += float(vals.get("cpu_time", "nan"))
-                rss = max(rss, float(vals.get("max_rss", "0") or 0))
-                jobs += 1
-            cls = tsv.stem if tsv.stem in per_class else tsv.parent.name
-            n += per_class.get(cls, 1) if tsv.parent == stage_dir else 1
-        out[stage_dir.name] = (cpu, n, rss, jobs)
-    return out
+    simulated = {}
+    for p in (clone / "results" / "throughput").glob("c*.parquet"):
+        simulated[p.stem] = len(set(pq.read_table(p, columns=["sample"]).column("sample").to_pylist()))
+    out: dict[str, list] = {}
+    for log in sorted((clone / "logs").rglob("*.log")):
+        m = _USAGE.search(log.read_text(encoding="utf-8", errors="replace"))
+        if not m:
+            continue
+        rel = log.relative_to(clone / "logs")
+        stage = rel.parts[0] if len(rel.parts) > 1 else rel.stem
+        if stage == "plugins":
+            stage = f"plugins/{rel.parts[1]}"
+        counts = simulated if stage == "throughput" else per_class
+        n = counts.get(log.stem, 0) if len(rel.parts) > 1 and stage not in ("topology",) else 0
+        cpu, kids, rss = float(m[1]), float(m[2]), float(m[3])
+        acc = out.setdefault(stage, [0.0, 0, 0.0, 0])
+        acc[0] += cpu + kids
+        acc[1] += n
+        acc[2] = max(acc[2], rss)
+        acc[3] += 1
+    return {k: tuple(v) for k, v in out.items()}
+
+
+def _cpu_of_children() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--keep", type=Path, help="clone into this folder and keep it")
-    ap.add_argument("--before", type=Path, help="a run folder whose logs/benchmarks to compare")
     ap.add_argument("-j", "--jobs", type=int, default=2)
     args = ap.parse_args(argv)
 
@@ -114,8 +128,12 @@ def main(argv: list[str] | None = None) -> int:
 
     dt, _ = _run([py, "-m", "flyover.warmup"], clone, logs / "warmup.log")
     print(f"set-up: numba kernels compiled in {dt:.0f} s")
+    cpu0 = _cpu_of_children()
     dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "main.log")
-    print(f"main job (snakemake -j{args.jobs}): {dt:.0f} s wall = {dt / 60:.1f} min, exit {proc.returncode}")
+    cpu = _cpu_of_children() - cpu0
+    print(f"main job (snakemake -j{args.jobs}): {dt:.0f} s wall = {dt / 60:.1f} min, exit {proc.returncode}; "
+          f"CPU {cpu:.0f} s (every process; {cpu / dt:.2f} cores busy on average)")
+    main_costs = _stage_costs(clone)
     summary = proc.stderr[proc.stderr.rfind("flyover: "):].splitlines()[:7]
     print("\n".join("    " + ln for ln in summary))
     dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "noop.log")
@@ -140,14 +158,12 @@ def main(argv: list[str] | None = None) -> int:
     dt, proc = _run([smk, f"-j{args.jobs}"], clone, logs / "city.log")
     print(f"    run: {dt:.0f} s wall, exit {proc.returncode}")
 
-    print("\nper stage (the whole main job and its reruns), from logs/benchmarks:")
-    print(f"    {'stage':<12} {'jobs':>5} {'interchanges':>12} {'CPU s':>8} {'CPU s / interchange':>20} {'peak RSS MB':>12}")
-    for stage, (cpu, n, rss, jobs) in _stage_costs(clone).items():
-        print(f"    {stage:<12} {jobs:>5} {n:>12} {cpu:>8.0f} {cpu / max(n, 1):>20.3f} {rss:>12.0f}")
-    if args.before:
-        print(f"\nbefore ({args.before}):")
-        for stage, (cpu, n, rss, jobs) in _stage_costs(args.before).items():
-            print(f"    {stage:<12} {jobs:>5} {n:>12} {cpu:>8.0f} {cpu / max(n, 1):>20.3f} {rss:>12.0f}")
+    print("\nper stage of the main job (CPU of its jobs and their child processes, from the")
+    print("resource line at the end of each job's log; interchanges: built, or simulated for throughput):")
+    print(f"    {'stage':<20} {'jobs':>5} {'interchanges':>12} {'CPU s':>8} {'CPU s / interchange':>20} {'peak RSS MB':>12}")
+    for stage, (cpu, n, rss, jobs) in main_costs.items():
+        per = f"{cpu / n:>20.3f}" if n else f"{'-':>20}"
+        print(f"    {stage:<20} {jobs:>5} {n:>12} {cpu:>8.0f} {per} {rss:>12.0f}")
     if not args.keep:
         shutil.rmtree(clone, ignore_errors=True)
     return 0

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import atexit
 import logging
+import resource
 import sys
 from pathlib import Path
 
@@ -36,3 +38,17 @@ def setup_logging(log_path: str, level: int = logging.INFO) -> None:
     root = logging.getLogger()
     root.handlers[:] = [to_file, to_console]
     root.setLevel(level)
+    atexit.register(_log_usage)
+
+
+#: the line every workflow script's log ends with (read by benchmarks/workflow.py)
+USAGE_LINE = "resource usage: cpu_s={cpu:.3f} children_cpu_s={children:.3f} max_rss_mb={rss:.0f}"
+
+
+def _log_usage() -> None:
+    """The job's CPU seconds, its child processes' (netconvert, the ASAM checker) and its peak
+    memory: Snakemake's own benchmark samples the process tree and misses short children."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    logging.getLogger("flyover.usage").info(USAGE_LINE.format(
+        cpu=me.ru_utime + me.ru_stime, children=kids.ru_utime + kids.ru_stime,
+        rss=max(me.ru_maxrss, kids.ru_maxrss) / 1024))
