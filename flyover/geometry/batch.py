@@ -19,6 +19,7 @@ import os
 import re
 import shutil
 import time
+from functools import partial
 from pathlib import Path
 
 from flyover.errors import FlyoverError
@@ -28,6 +29,7 @@ from flyover.geometry.tables import (
     sample_seed,
 )
 from flyover.geometry.model import write_geometry
+from flyover.parallel import map_ordered
 from flyover.progress import Progress
 from flyover.topology.io import read_graphml, remove_stale_temporaries
 from flyover.topology.tables import write_parquet
@@ -65,10 +67,37 @@ def remove_stale_samples(folder: str | os.PathLike, samples) -> list[str]:
     return removed
 
 
+def _build_one(topo, feature_sets, folder: Path, class_id: str, seed: int,
+               settings: LayoutSettings, sample: int) -> tuple[list[dict], bool]:
+    """One sample: its geometry.json written, its rows (with timings) and whether it was built."""
+    fs = feature_sets[sample]
+    t0 = time.process_time()
+    path = folder / str(sample) / "geometry.json"
+    try:
+        ic = build_sample(topo, fs, class_id=class_id, sample=sample, seed=seed,
+                          settings=settings,
+                          resampler=domain_resampler(feature_sets, sample_seed(seed, class_id, sample)))
+        write_geometry(ic.geometry, path)
+    except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
+        if isinstance(exc, FlyoverError):
+            reason = exc.one_line()
+            log.error("%s: not built: %s", path, reason)
+        else:
+            reason = f"{type(exc).__name__}: {exc}"
+            log.exception("%s: not built", path)
+        Path(path).unlink(missing_ok=True)
+        return failed_rows(class_id, sample, fs[1], f"not built: {reason}"), False
+    for o in ic.outcomes:
+        if o.infeasible:
+            log.warning("%s sample %d ramp %s: %s", class_id, sample, o.ramp, o.infeasible)
+    log.info("%s: %d ramps, %.2f s CPU", path, len(ic.outcomes), time.process_time() - t0)
+    return geometry_rows(ic), True
+
+
 def build_class(topology: str | os.PathLike, features: str | os.PathLike,
                 table: str | os.PathLike, folder: str | os.PathLike, *, class_id: str,
                 seed: int, settings: LayoutSettings, timing: str | os.PathLike | None = None,
-                name: str = "") -> list[dict]:
+                name: str = "", workers: int = 1) -> list[dict]:
     """Build every feature set of one class; write each ``geometry.json`` and the class table.
 
     Parameters
@@ -82,6 +111,8 @@ def build_class(topology: str | os.PathLike, features: str | os.PathLike,
     timing
         Where each ramp's fitting seconds go (:data:`GEOMETRY_TIMING_SCHEMA`), kept out of
         ``table`` so that it is the same bytes in every run.
+    workers
+        Processes to build in (:func:`flyover.parallel.map_ordered`); the same bytes for any.
 
     Returns the rows written to ``table``.
     """
@@ -98,32 +129,10 @@ def build_class(topology: str | os.PathLike, features: str | os.PathLike,
         log.info("removed %s: left by a killed run", path)
     progress = Progress("geometry", f"{class_id} {name}".strip(), len(feature_sets))
     rows: list[dict] = []
-    for sample, fs in sorted(feature_sets.items()):
-        t0 = time.process_time()
-        path = folder / str(sample) / "geometry.json"
-        try:
-            ic = build_sample(topo, fs, class_id=class_id, sample=sample, seed=seed,
-                              settings=settings,
-                              resampler=domain_resampler(feature_sets,
-                                                         sample_seed(seed, class_id, sample)))
-            write_geometry(ic.geometry, path)
-        except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
-            if isinstance(exc, FlyoverError):
-                reason = exc.one_line()
-                log.error("%s: not built: %s", path, reason)
-            else:
-                reason = f"{type(exc).__name__}: {exc}"
-                log.exception("%s: not built", path)
-            Path(path).unlink(missing_ok=True)
-            rows += failed_rows(class_id, sample, fs[1], f"not built: {reason}")
-            progress.done(ok=False)
-            continue
-        for o in ic.outcomes:
-            if o.infeasible:
-                log.warning("%s sample %d ramp %s: %s", class_id, sample, o.ramp, o.infeasible)
-        rows += geometry_rows(ic)
-        log.info("%s: %d ramps, %.2f s CPU", path, len(ic.outcomes), time.process_time() - t0)
-        progress.done()
+    build = partial(_build_one, topo, feature_sets, folder, class_id, seed, settings)
+    for one, ok in map_ordered(build, sorted(feature_sets), workers):
+        rows += one
+        progress.done(ok=ok)
     if timing is not None:
         write_parquet(rows, GEOMETRY_TIMING_SCHEMA, timing)
     write_parquet(rows, GEOMETRY_SCHEMA, table)

@@ -175,6 +175,7 @@ def collect_validation(tables: Iterable[str | os.PathLike], out: str | os.PathLi
 
 #: the files of one interchange that the export stage writes beside its geometry.json
 EXPORT_FILES = ("interchange.xodr", "plan.png", "interchange.net.xml")
+_NO_XODR = "not run: no OpenDRIVE file (export failed)"
 
 
 def class_samples(geometry_table: str | os.PathLike) -> dict[int, str]:
@@ -187,10 +188,52 @@ def class_samples(geometry_table: str | os.PathLike) -> dict[int, str]:
     return dict(sorted(out.items()))
 
 
+def _export_one(folder: Path, options: ExportOptions | None, job: tuple[int, str]
+                ) -> list[CheckResult]:
+    """One interchange's export files and its ``export`` and ``netconvert`` rows."""
+    from flyover.opendrive.plan import draw_plan  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.validate import netconvert_check  # noqa: PLC0415
+    from flyover.sumo.netconvert import run_netconvert  # noqa: PLC0415
+    from flyover.topology.io import atomic_write, remove_stale_temporaries  # noqa: PLC0415
+
+    sample, not_built = job
+    here = folder / str(sample)
+    geometry = here / "geometry.json"
+    for f in EXPORT_FILES:
+        (here / f).unlink(missing_ok=True)
+        remove_stale_temporaries(here, f)  # of a killed run
+    if not_built:
+        return [CheckResult("export", False, f"{geometry}: {not_built}"),
+                CheckResult("netconvert", False, _NO_XODR)]
+    try:
+        g, data = _write(geometry, options)
+        draw_plan(read_xodr(io.BytesIO(data)), here / "plan.png", title=f"{g.class_id} sample {g.sample}")
+        atomic_write(here / "interchange.xodr", data)
+    except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
+        if isinstance(exc, FlyoverError):
+            error = exc.one_line()
+        else:
+            error = f"{geometry}: {type(exc).__name__}: {exc}"
+            log.exception("export of %s failed", geometry)
+        for f in EXPORT_FILES:
+            (here / f).unlink(missing_ok=True)
+        return [CheckResult("export", False, error), CheckResult("netconvert", False, _NO_XODR)]
+    minor = (options or ExportOptions()).opendrive_minor
+    written = CheckResult("export", True, f"{here / 'interchange.xodr'}: OpenDRIVE 1.{minor}, "
+                          f"{data.count(b'<road ')} roads, {data.count(b'<junction ')} junctions, "
+                          f"{len(data)} bytes")
+    nc = run_netconvert(here / "interchange.xodr", here / "interchange.net.xml")
+    for w in nc.warnings:
+        log.info("%s: netconvert %s", here, w)
+    return [written, netconvert_check(nc)]
+
+
 def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
                  table: str | os.PathLike, *, class_id: str,
-                 options: ExportOptions | None = None, name: str = "") -> list[dict]:
-    """Export every interchange of one class in one process: ``.xodr``, ``plan.png``, SUMO network.
+                 options: ExportOptions | None = None, name: str = "", workers: int = 1
+                 ) -> list[dict]:
+    """Export every interchange of one class in one job: ``.xodr``, ``plan.png``, SUMO network.
 
     For each sample of the class's geometry table, ``{folder}/{sample}/geometry.json``
     becomes ``interchange.xodr`` (OpenDRIVE), ``plan.png`` and, through netconvert,
@@ -198,60 +241,26 @@ def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
     ``export`` and ``netconvert`` rows (:data:`VALIDATION_SCHEMA`; the validation
     stage takes them over): an interchange that cannot be written or converted is
     a failed row with the one-line error, and none of its export files is left.
+    ``workers`` processes share the interchanges (the same files for any number).
     """
-    from flyover.opendrive.plan import draw_plan  # noqa: PLC0415
-    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
-    from flyover.opendrive.validate import netconvert_check  # noqa: PLC0415
-    from flyover.progress import Progress  # noqa: PLC0415
-    from flyover.sumo.netconvert import run_netconvert  # noqa: PLC0415
-    from flyover.topology.io import atomic_write  # noqa: PLC0415
-    from flyover.topology.tables import write_parquet  # noqa: PLC0415
+    from functools import partial  # noqa: PLC0415
 
+    from flyover.parallel import map_ordered  # noqa: PLC0415
+    from flyover.progress import Progress  # noqa: PLC0415
     from flyover.topology.io import remove_stale_temporaries  # noqa: PLC0415
+    from flyover.topology.tables import write_parquet  # noqa: PLC0415
 
     folder = Path(folder)
     remove_stale_temporaries(Path(table).parent, Path(table).name)
     samples = class_samples(geometry_table)
     progress = Progress("export", f"{class_id} {name}".strip(), len(samples))
     rows: list[dict] = []
-    for sample, not_built in samples.items():
-        here = folder / str(sample)
-        geometry = here / "geometry.json"
-        for f in EXPORT_FILES:
-            (here / f).unlink(missing_ok=True)
-            remove_stale_temporaries(here, f)  # of a killed run
-        if not_built:
-            results = [CheckResult("export", False, f"{geometry}: {not_built}"),
-                       CheckResult("netconvert", False, "not run: no OpenDRIVE file (export failed)")]
-        else:
-            results = []
-            try:
-                g, data = _write(geometry, options)
-                draw_plan(read_xodr(io.BytesIO(data)), here / "plan.png",
-                          title=f"{g.class_id} sample {g.sample}")
-                atomic_write(here / "interchange.xodr", data)
-            except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
-                error = exc.one_line() if isinstance(exc, FlyoverError) else \
-                    f"{geometry}: {type(exc).__name__}: {exc}"
-                if not isinstance(exc, FlyoverError):
-                    log.exception("export of %s failed", geometry)
-                for f in EXPORT_FILES:
-                    (here / f).unlink(missing_ok=True)
-                results = [CheckResult("export", False, error),
-                           CheckResult("netconvert", False, "not run: no OpenDRIVE file (export failed)")]
-            else:
-                minor = (options or ExportOptions()).opendrive_minor
-                results.append(CheckResult(
-                    "export", True, f"{here / 'interchange.xodr'}: OpenDRIVE 1.{minor}, "
-                    f"{data.count(b'<road ')} roads, {data.count(b'<junction ')} junctions, "
-                    f"{len(data)} bytes"))
-                nc = run_netconvert(here / "interchange.xodr", here / "interchange.net.xml")
-                for w in nc.warnings:
-                    log.info("%s: netconvert %s", here, w)
-                results.append(netconvert_check(nc))
+    jobs = list(samples.items())
+    for (sample, _), results in zip(jobs, map_ordered(partial(_export_one, folder, options), jobs,
+                                                      workers)):
         for r in results:
             if not r.ok:
-                log.error("%s %s FAILED: %s", here, r.check, r.detail)
+                log.error("%s %s FAILED: %s", folder / str(sample), r.check, r.detail)
         rows += [_row(class_id, sample, r) for r in results]
         progress.done(ok=all(r.ok for r in results))
     write_parquet(rows, VALIDATION_SCHEMA, table)
@@ -261,17 +270,21 @@ def export_class(geometry_table: str | os.PathLike, folder: str | os.PathLike,
 def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
                    table: str | os.PathLike, *, class_id: str,
                    options: ExportOptions | None = None, run_qc: bool = True,
-                   clearance_m: float = 5.5, name: str = "", chunk: int = 32) -> list[dict]:
+                   clearance_m: float = 5.5, name: str = "", chunk: int = 32,
+                   workers: int = 1) -> list[dict]:
     """Validate every interchange of one class: its rows of ``validation.parquet`` → ``table``.
 
-    Reads the files the export stage wrote (``export_class``) and takes over its
-    ``export`` and ``netconvert`` rows; the XSD and ASAM checks of the whole class
-    (both renditions of every interchange) run in one process of the checker's
-    environment per ``chunk`` interchanges (its start-up, ~1 s, is paid once per chunk;
-    progress is reported after each); continuity, routes (on the SUMO network the export
-    stage made) and clearance per interchange. Checks that need a file the export could not make
-    fail as ``not run``.
+    Reads the files the export stage wrote (:func:`export_class`) and takes over its
+    ``export`` and ``netconvert`` rows; the XSD and ASAM checks (both renditions of every
+    interchange) run in one process of the checker's environment per ``chunk``
+    interchanges (its start-up, ~1 s, is paid once per chunk; progress is reported after
+    each); continuity, routes (on the SUMO network the export stage made) and clearance
+    per interchange. Checks that need a file the export could not make fail as ``not
+    run``. ``workers`` processes share the chunks (the same rows for any number).
     """
+    from functools import partial  # noqa: PLC0415
+
+    from flyover.parallel import map_ordered  # noqa: PLC0415
     from flyover.progress import Progress  # noqa: PLC0415
     from flyover.topology.io import remove_stale_temporaries  # noqa: PLC0415
     from flyover.topology.tables import write_parquet  # noqa: PLC0415
@@ -281,21 +294,30 @@ def validate_class(export_table: str | os.PathLike, folder: str | os.PathLike,
     exported: dict[int, dict[str, CheckResult]] = {}
     for r in pq.read_table(str(export_table), schema=VALIDATION_SCHEMA).to_pylist():
         exported.setdefault(r["sample"], {})[r["check"]] = CheckResult(r["check"], r["ok"], r["detail"])
-    progress = Progress("validation", f"{class_id} {name}".strip(), len(exported))
-    rows: list[dict] = []
     samples = sorted(exported)
-    for k in range(0, len(samples), chunk):
-        rows += _validate_chunk({s: exported[s] for s in samples[k:k + chunk]}, folder,
-                                class_id=class_id, options=options, run_qc=run_qc,
-                                clearance_m=clearance_m, progress=progress)
+    if workers > 1 and samples:  # a multiple of `workers` chunks of at most `chunk`, all equal
+        n_chunks = workers * -(-len(samples) // (workers * chunk))
+        chunk = -(-len(samples) // n_chunks)
+    chunks = [{s: exported[s] for s in samples[k:k + chunk]} for k in range(0, len(samples), chunk)]
+    progress = Progress("validation", f"{class_id} {name}".strip(), len(exported))
+    check = partial(_validate_chunk, folder, options, run_qc, clearance_m)
+    rows: list[dict] = []
+    for done in map_ordered(check, chunks, workers):
+        for sample, results in done:
+            for r in results:
+                failed = not r.ok and not r.detail.startswith("not run")
+                (log.error if failed else log.info)("%s %s %s: %s", folder / str(sample), r.check,
+                                                    "ok" if r.ok else "FAILED", r.detail)
+            rows += [_row(class_id, sample, r) for r in results]
+            progress.done(ok=all(r.ok for r in results))
     write_parquet(rows, VALIDATION_SCHEMA, table)
     return rows
 
 
-def _validate_chunk(exported: dict[int, dict[str, CheckResult]], folder: Path, *, class_id: str,
-                    options: ExportOptions | None, run_qc: bool, clearance_m: float,
-                    progress) -> list[dict]:
-    """The rows of some interchanges of one class, their XSD and ASAM checks in one process."""
+def _validate_chunk(folder: Path, options: ExportOptions | None, run_qc: bool, clearance_m: float,
+                    exported: dict[int, dict[str, CheckResult]]
+                    ) -> list[tuple[int, list[CheckResult]]]:
+    """The checks of some interchanges of one class, their XSD and ASAM checks in one process."""
     from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
     from flyover.opendrive.validate import QCItem, continuity_check, qc_checks, routes_check  # noqa: PLC0415
 
@@ -315,7 +337,7 @@ def _validate_chunk(exported: dict[int, dict[str, CheckResult]], folder: Path, *
     times: dict[str, float] = {}
     checked = dict(zip(item_samples, qc_checks(items, options, run_qc, times)))
     log.info("ASAM checker and XSD for %d interchanges: %.1f s", len(items), times.get("asam_qc", 0.0))
-    rows: list[dict] = []
+    out = []
     for sample, done in exported.items():
         here = folder / str(sample)
         if sample in checked:
@@ -324,16 +346,11 @@ def _validate_chunk(exported: dict[int, dict[str, CheckResult]], folder: Path, *
                        routes_check(here / "interchange.net.xml" if done["netconvert"].ok else None,
                                     net, g)]
         else:
-            why = parsed.get(sample, "not run: no OpenDRIVE file (export failed)")
+            why = parsed.get(sample, _NO_XODR)
             results = [done["export"]] + [
                 CheckResult(c, False, why if c != "netconvert" else done["netconvert"].detail)
                 for c in CHECKS]
         results = [r for r in results if r.check != "asam_qc" or run_qc]
         results.append(clearance_check(here / "geometry.json", clearance_m))
-        for r in results:
-            failed = not r.ok and not r.detail.startswith("not run")
-            (log.error if failed else log.info)("%s %s %s: %s", here, r.check,
-                                                "ok" if r.ok else "FAILED", r.detail)
-        rows += [_row(class_id, sample, r) for r in results]
-        progress.done(ok=all(r.ok for r in results))
-    return rows
+        out.append((sample, results))
+    return out

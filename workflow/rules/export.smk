@@ -23,7 +23,7 @@ rule export_class:
         version=EXPORT_VERSION,
         export=config["export"],
         folder="results/interchanges/{class_id}",
-    threads: 1
+    threads: 2
     resources:
         mem_mb=1000,
         runtime=30,
@@ -49,7 +49,7 @@ rule validate_class:
         asam_qc=config["validation"]["asam_qc"],
         clearance_m=config["geometry"]["clearance_m"],
         folder="results/interchanges/{class_id}",
-    threads: 1
+    threads: 2
     resources:
         mem_mb=1500,
         runtime=30,

@@ -24,7 +24,7 @@ rule geometry_class:
         settings=config["geometry"],
         seed=config["seed"],
         folder="results/interchanges/{class_id}",
-    threads: 1
+    threads: 2
     resources:
         mem_mb=1000,
         runtime=30,

@@ -5,4 +5,4 @@ from flyover.workflow_log import setup_logging
 setup_logging(snakemake.log[0])
 export_class(snakemake.input.geometry, snakemake.params.folder, snakemake.output.table,
              class_id=snakemake.wildcards.class_id,
-             options=export_options(snakemake.params.export))
+             options=export_options(snakemake.params.export), workers=snakemake.threads)

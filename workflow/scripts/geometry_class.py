@@ -8,4 +8,4 @@ build_class(snakemake.input.topology, snakemake.input.features, snakemake.output
             snakemake.params.folder, class_id=snakemake.wildcards.class_id,
             seed=int(snakemake.params.seed),
             settings=LayoutSettings.from_config(snakemake.params.settings),
-            timing=snakemake.output.timing)
+            timing=snakemake.output.timing, workers=snakemake.threads)

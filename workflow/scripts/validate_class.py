@@ -7,4 +7,4 @@ validate_class(snakemake.input.export, snakemake.params.folder, snakemake.output
                class_id=snakemake.wildcards.class_id,
                options=export_options(snakemake.params.export),
                run_qc=bool(snakemake.params.asam_qc),
-               clearance_m=float(snakemake.params.clearance_m))
+               clearance_m=float(snakemake.params.clearance_m), workers=snakemake.threads)
