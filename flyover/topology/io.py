@@ -41,6 +41,7 @@ from flyover.topology.names import check_name
 __all__ = [
     "TOPOLOGY_SUFFIXES",
     "remove_stale_temporaries",
+    "write_if_changed",
     "read_graphml",
     "write_graphml",
     "graphml_bytes",
@@ -79,6 +80,19 @@ def remove_stale_temporaries(folder: str | os.PathLike, name: str = "*") -> list
     for p in stale:
         p.unlink(missing_ok=True)
     return stale
+
+
+def write_if_changed(path: str | os.PathLike, data: bytes) -> bool:
+    """:func:`atomic_write` unless ``path`` already holds exactly ``data`` (then its mtime
+    stays, and Snakemake sees no change); returns whether it wrote."""
+    path = Path(path)
+    try:
+        if path.read_bytes() == data:
+            return False
+    except OSError:
+        pass
+    atomic_write(path, data)
+    return True
 
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import os
+from pathlib import Path
 from typing import Iterable, Sequence
 
 import pyarrow as pa
@@ -13,7 +14,8 @@ import pyarrow.parquet as pq
 from flyover.topology.classify import TopologyClass, classify
 from flyover.topology.io import atomic_write, read_graphml
 
-__all__ = ["CLASSES_SCHEMA", "REJECTED_SCHEMA", "write_parquet", "classify_cities"]
+__all__ = ["CLASSES_SCHEMA", "REJECTED_SCHEMA", "write_parquet", "classify_cities",
+           "write_class_sources", "write_manifest"]
 
 CLASSES_SCHEMA = pa.schema([
     ("city", pa.string()), ("interchange", pa.string()), ("source_file", pa.string()),
@@ -56,7 +58,10 @@ def classify_cities(indexes: Iterable[dict], *, catalog_names: bool = True
     rows, manifest = [], {}
     for c in classes:
         name = c.class_name if catalog_names else c.class_id
-        rep = where[id(c.representative)]
+        # the catalog's member when the class has one (the built-in city: its element names
+        # are the designs' own), else the first by (city/source, name)
+        rep = where[id(min(c.members, key=lambda m: (where[id(m)]["city"] != "catalog",
+                                                      m.source or "", m.name)))]
         manifest[c.class_id] = {
             "class_name": name, "representative": rep["graphml"], "n_roads": c.n_roads,
             "n_ramps": c.n_ramps, "shape": c.shape, "label_counts": c.label_counts(),
@@ -70,6 +75,26 @@ def classify_cities(indexes: Iterable[dict], *, catalog_names: bool = True
     rows.sort(key=lambda r: (r["city"], r["interchange"]))
     rejected.sort(key=lambda r: (r["city"], r["source_file"], r["element"]))
     return rows, rejected, {"classes": manifest}
+
+
+def write_class_sources(manifest: dict, folder: str | os.PathLike) -> list[str]:
+    """Each class's representative topology as ``{folder}/{class_id}/representative.graphml``
+    (named after the class), rewritten only when its bytes change.
+
+    The class's later stages read this file, at a path that does not depend on which member
+    represents the class: a new city whose interchanges join existing classes leaves their
+    files (and so their jobs) untouched unless the representative itself changes. Returns
+    the classes whose file was (re)written.
+    """
+    from flyover.topology.io import graphml_bytes, write_if_changed  # noqa: PLC0415
+
+    changed = []
+    for class_id, entry in sorted(manifest["classes"].items()):
+        topology = read_graphml(entry["representative"])
+        topology.name = class_id
+        if write_if_changed(Path(folder) / class_id / "representative.graphml", graphml_bytes(topology)):
+            changed.append(class_id)
+    return changed
 
 
 def write_manifest(manifest: dict, path: str | os.PathLike) -> None:

@@ -12,7 +12,7 @@ from flyover.topology.io import TOPOLOGY_SUFFIXES
 validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
-TOPOLOGY_VERSION = 1
+TOPOLOGY_VERSION = 2  # 2: representative.graphml per class (catalog member first)
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 3
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
@@ -61,8 +61,11 @@ def class_ids():
 
 
 def class_representative(wildcards):
-    """The GraphML of the first member of a class (by city, file, name)."""
-    return class_manifest()["classes"][wildcards.class_id]["representative"]
+    """The class's representative topology, written by the classify checkpoint beside its
+    manifest at a path of the class's own, rewritten only when it changes (a new city whose
+    interchanges join existing classes does not rerun them)."""
+    class_manifest()["classes"][wildcards.class_id]  # the class exists once classified
+    return f"results/classes/{wildcards.class_id}/representative.graphml"
 
 
 def class_name(wildcards):

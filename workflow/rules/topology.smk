@@ -34,6 +34,7 @@ checkpoint classify:
     params:
         version=TOPOLOGY_VERSION,
         catalog_names=config["topology"]["catalog_names"],
+        classes="results/classes",
     benchmark:
         "logs/benchmarks/classify.tsv"
     script:

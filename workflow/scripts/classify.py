@@ -6,6 +6,7 @@ from flyover.topology.tables import (
     CLASSES_SCHEMA,
     REJECTED_SCHEMA,
     classify_cities,
+    write_class_sources,
     write_manifest,
     write_parquet,
 )
@@ -19,9 +20,10 @@ rows, rejected, manifest = classify_cities(
 write_parquet(rows, CLASSES_SCHEMA, snakemake.output.table)
 write_parquet(rejected, REJECTED_SCHEMA, snakemake.output.rejected)
 write_manifest(manifest, snakemake.output.manifest)
+changed = write_class_sources(manifest, snakemake.params.classes)
 log = logging.getLogger("classify")
 for r in rejected:
     where = ": ".join(x for x in (r["source_file"], r["element"]) if x)
     log.warning("rejected %s: %s", where, r["reason"])
-log.info("%d interchanges in %d classes, %d rejected",
-         len(rows), len(manifest["classes"]), len(rejected))
+log.info("%d interchanges in %d classes, %d rejected; representative changed: %s",
+         len(rows), len(manifest["classes"]), len(rejected), ", ".join(changed) or "none")
