@@ -34,7 +34,6 @@ checkpoint classify:
     params:
         version=TOPOLOGY_VERSION,
         catalog_names=config["topology"]["catalog_names"],
-        classes="results/classes",
     benchmark:
         "logs/benchmarks/classify.tsv"
     script:

@@ -1,5 +1,6 @@
 """Checkpoint classify: all city indexes → classes.parquet, rejected.parquet, manifest."""
 import logging
+from pathlib import Path
 
 from flyover.topology.city import read_city_index
 from flyover.topology.tables import (
@@ -20,7 +21,7 @@ rows, rejected, manifest = classify_cities(
 write_parquet(rows, CLASSES_SCHEMA, snakemake.output.table)
 write_parquet(rejected, REJECTED_SCHEMA, snakemake.output.rejected)
 write_manifest(manifest, snakemake.output.manifest)
-changed = write_class_sources(manifest, snakemake.params.classes)
+changed = write_class_sources(manifest, Path(snakemake.output.manifest).parent)
 log = logging.getLogger("classify")
 for r in rejected:
     where = ": ".join(x for x in (r["source_file"], r["element"]) if x)
