@@ -104,6 +104,8 @@ class Results:
         key = named or sql
         if key in self._cache:
             return self._cache[key]
+        import duckdb  # noqa: PLC0415
+
         text = NAMED_QUERIES[named].sql if named else sql
         try:
             tbl = query(text, self.root)
@@ -112,6 +114,9 @@ class Results:
         except AnalyticsError as exc:
             raise ReportError(f"query failed: {exc.reason}", source=str(self.root),
                               element=named or " ".join(text.split())[:80]) from None
+        except duckdb.Error as exc:  # a table that cannot be read (made into a view)
+            raise ReportError(f"unreadable table: {str(exc).splitlines()[0]}",
+                              source=str(self.root)) from None
         else:
             command = f"flyover query --named {named}" if named else \
                 "flyover query " + json.dumps(" ".join(text.split()))
