@@ -44,6 +44,5 @@ rule report:
         "../envs/flyover.yaml"
     params:
         version=REPORT_VERSION,
-        results="results",
     script:
         "../scripts/report.py"

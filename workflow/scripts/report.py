@@ -5,4 +5,5 @@ from flyover.report import build_report
 from flyover.workflow_log import setup_logging
 
 setup_logging(snakemake.log[0])
-build_report(snakemake.params.results, Path(snakemake.output.index).parent)
+# the results folder is where classes.parquet lies; the report where its index.html goes
+build_report(Path(snakemake.input.classes).parent, Path(snakemake.output.index).parent)

@@ -10,6 +10,7 @@
   var info = JSON.parse(document.getElementById("view-info").textContent);
   var home = svg.getAttribute("viewBox").split(/\s+/).map(Number);
   var box = home.slice();
+  var ramps = Array.prototype.slice.call(svg.querySelectorAll("polyline.ramp"));
 
   function setBox(b) {
     box = b;
@@ -19,6 +20,11 @@
     svg.querySelectorAll(".labels text").forEach(function (t) {
       t.style.fontSize = (12 * scale).toFixed(2) + "px";
       t.style.strokeWidth = (3 * scale).toFixed(2) + "px";
+    });
+    // a ramp is as wide as its lanes, but never thinner than 2.5 px on screen
+    var least = 2.5 * scale;
+    ramps.forEach(function (p) {
+      p.setAttribute("stroke-width", Math.max(Number(p.getAttribute("data-w")), least).toFixed(2));
     });
   }
 
