@@ -169,6 +169,8 @@ def make_results(root: Path, stages: tuple[str, ...] = STAGES) -> Path:
                   "flagged": False, "seed": 1, "ok": True, "reason": ""}
                  for c, ss in samples.items() for s in ss[:2] for d in (450.0, 1800.0)]
         _table(res / "throughput.parquet", trows)
+        for c in samples:
+            _table(res / "throughput" / f"{c}.parquet", [r for r in trows if r["class_id"] == c])
         stats = []
         for d in (450.0, 1800.0):
             stats.append({"density_veh_h": d, "scope": "class", "a": CLASS, "b": CLASS2,

@@ -125,6 +125,19 @@ FROM fuel GROUP BY ALL
 """
 
 
+def _missing_stages(stages) -> list[tuple[str, str]]:
+    """The evaluation stages :func:`flyover.summary.stage_status` does not list (it lists
+    them once they ran), with the target that runs them."""
+    if not stages:
+        return []
+    names = {s.stage for s in stages}
+    core = {"sampling", "geometry", "export", "validation", "throughput"}
+    out = [] if "throughput" in names else [("throughput", "throughput")]
+    if not names - core:
+        out.append(("plugins (e.g. truck_fuel)", "plugins"))
+    return out
+
+
 def _finite(value: Any) -> Any:
     """``value`` with non-finite floats as JSON can hold them (``"inf"``, ``null``)."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -304,9 +317,10 @@ def build_report(results: str | os.PathLike = "results", out: str | os.PathLike 
                 prev_s = viewable[i - 1]["sample"] if i > 0 else None
                 next_s = viewable[i + 1]["sample"] if i + 1 < len(viewable) else None
                 _interchange_page(writer, res, class_id, info, row, ctx, (prev_s, next_s))
+        stages = stage_status(res.root) if manifest else []
         overview = {
             "cities": res.cities(), "member_class": member_class, "classes": classes,
-            "names": names, "stages": stage_status(res.root) if manifest else [],
+            "names": names, "stages": stages, "stages_missing": _missing_stages(stages),
             "classes_tbl": classes_tbl, "rejected": res.sql("SELECT * FROM rejected "
                                                             "ORDER BY city, source_file"),
             "geometry_problems": res.sql(_GEOMETRY_PROBLEMS),
