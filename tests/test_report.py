@@ -213,3 +213,15 @@ def read_geometry_from(g, tmp=None):
     with tempfile.TemporaryDirectory() as d:
         write_geometry(g, Path(d) / "geometry.json")
         return read_geometry(Path(d) / "geometry.json")
+
+
+def test_an_unreadable_geometry_json_is_a_note_on_its_page(tmp_path, caplog):
+    res = make_results(tmp_path)
+    bad = res / "interchanges" / CLASS / "1" / "geometry.json"
+    bad.write_text("{not json", encoding="utf-8")
+    build_report(res)
+    html = text(res / "report" / "interchanges" / CLASS / "1.html")
+    assert "The plan view cannot be drawn" in html and "geometry.json" in html
+    assert "<svg" not in html
+    assert "<svg" in text(res / "report" / "interchanges" / CLASS / "0.html")
+    assert any("geometry.json" in r.getMessage() for r in caplog.records)

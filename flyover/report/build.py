@@ -32,6 +32,7 @@ from typing import Any, Mapping
 from urllib.parse import quote
 
 from flyover import __version__
+from flyover.errors import FlyoverError
 from flyover.report.data import Results, display
 
 __all__ = ["build_report", "REPORT_PAGES"]
@@ -160,7 +161,6 @@ def _environment():
     env.filters["cell"] = display
     env.filters["pct"] = lambda v: "—" if v is None or (isinstance(v, float) and math.isnan(v)) \
         else f"{100 * v:.1f} %"
-    env.filters["jsonable"] = _finite
     return env
 
 
@@ -185,7 +185,7 @@ class _Writer:
         path.write_text(html, encoding="utf-8")
 
 
-def _class_context(results: Results, manifest: Mapping[str, dict]) -> dict[str, Any]:
+def _class_context(results: Results) -> dict[str, Any]:
     """Every per-class table, grouped by class."""
     t = {
         "coverage": results.named("coverage"),
@@ -216,6 +216,7 @@ def _interchange_rows(results: Results, class_id: str, ctx: Mapping[str, Any]) -
         not_built = next((r["infeasible"] for r in ramps
                           if (r["infeasible"] or "").startswith("not built")), "")
         checks = [r for r in g["failed_checks"].get(class_id, []) if r["sample"] == s]
+        validated = any(r["sample"] == s for r in g["validation_rows"].get(class_id, []))
         fuel = next((r for r in g["fuel_per_interchange"].get(class_id, []) if r["sample"] == s),
                     None)
         runs = [r for r in g["throughput_rows"].get(class_id, []) if r["sample"] == s]
@@ -226,7 +227,7 @@ def _interchange_rows(results: Results, class_id: str, ctx: Mapping[str, Any]) -
         out.append({
             "sample": s, "ramps": len(ramps), "ramps_ok": sum(bool(r["ok"]) for r in ramps),
             "not_built": not_built, "failed_checks": [r["check"] for r in checks],
-            "validated": not ctx["tables"]["failed_checks"].absent,
+            "validated": validated,
             "fuel": fuel, "throughput_runs": len(runs),
             "plan": f"{folder}/plan.png" if results.exists(f"{folder}/plan.png") else None,
             "view": results.exists(f"{folder}/geometry.json"),
@@ -245,13 +246,16 @@ def _interchange_page(writer: _Writer, results: Results, class_id: str, info: Ma
     extra = {r["ramp"]: {"fuel_direction": r["direction"], "fuel_ml": r["fuel_ml"],
                          "fuel_ml_per_km": r["fuel_ml_per_km"], "fuel_completed": r["completed"]}
              for r in fuel}
-    view = None
+    view, view_error = None, ""
     path = results.root / "interchanges" / class_id / str(s) / "geometry.json"
-    if path.is_file():
+    try:
         view = plan_view(read_geometry(path), extra)
+    except FlyoverError as exc:  # one unreadable file is a note on its page, not no report
+        log.warning("report: %s", exc.one_line())
+        view_error = exc.one_line()
     writer.page(
         f"interchanges/{class_id}/{s}.html", "interchange.html",
-        class_id=class_id, cls=info, row=row, view=view,
+        class_id=class_id, cls=info, row=row, view=view, view_error=view_error,
         view_info=_finite(view.info) if view else {},
         ramps=[r for r in g["geometry_rows"].get(class_id, []) if r["sample"] == s],
         checks=None if ctx["tables"]["validation_rows"].absent else
@@ -290,7 +294,7 @@ def build_report(results: str | os.PathLike = "results", out: str | os.PathLike 
         writer = _Writer(res, tmp, final)
         _assets(tmp)
         manifest = res.manifest()
-        ctx = _class_context(res, manifest)
+        ctx = _class_context(res)
         classes_tbl = res.sql("SELECT * FROM classes ORDER BY class_name, city, interchange")
         member_class = {(r["city"], r["interchange"]): r for r in classes_tbl.records}
         names = {c: m.get("class_name", c) for c, m in manifest.items()}
