@@ -225,3 +225,11 @@ def test_an_unreadable_geometry_json_is_a_note_on_its_page(tmp_path, caplog):
     assert "<svg" not in html
     assert "<svg" in text(res / "report" / "interchanges" / CLASS / "0.html")
     assert any("geometry.json" in r.getMessage() for r in caplog.records)
+
+
+def test_geometry_without_its_timing_table_is_still_shown(tmp_path):
+    res = make_results(tmp_path, ("topology", "sampling", "geometry"))
+    (res / "geometry_timing.parquet").unlink()
+    build_report(res)
+    html = text(res / "report" / "classes" / f"{CLASS}.html")
+    assert "ramps within their targets" in html and "geometry_timing" not in html

@@ -185,11 +185,22 @@ class _Writer:
         path.write_text(html, encoding="utf-8")
 
 
+def _geometry_summary(results: Results):
+    """Per class: ramps within targets, first try, lengths, and fitting time when the
+    timing table is there (it is kept apart from ``geometry``; without it, no time)."""
+    tbl = results.sql(_GEOMETRY_SUMMARY)
+    if tbl.absent and tbl.table == "geometry_timing":
+        tbl = results.sql(_GEOMETRY_SUMMARY
+                          .replace("median(t.seconds)", "NULL::DOUBLE")
+                          .replace("LEFT JOIN geometry_timing t USING (class_id, sample, ramp)", ""))
+    return tbl
+
+
 def _class_context(results: Results) -> dict[str, Any]:
     """Every per-class table, grouped by class."""
     t = {
         "coverage": results.named("coverage"),
-        "geometry": results.sql(_GEOMETRY_SUMMARY),
+        "geometry": _geometry_summary(results),
         "radius": results.sql(_BY_TARGET.format(col="target_radius_m", got="min_radius_m")),
         "slope": results.sql(_BY_TARGET.format(col="target_slope_pct", got="max_slope_pct")),
         "validation": results.sql(_VALIDATION_BY_CHECK),
