@@ -205,7 +205,7 @@ def make_geometry():
     return geometry(CLASS, 0)
 
 
-def read_geometry_from(g, tmp=None):
+def read_geometry_from(g):
     import tempfile  # noqa: PLC0415
 
     from flyover.geometry.model import write_geometry  # noqa: PLC0415
