@@ -196,7 +196,13 @@ def test_plan_view_orders_pieces_by_height_and_colours_them():
     assert len(ramp) > 3 and ramp[0].colour != ramp[-1].colour  # climbs: colours change
     assert {e for e, _ in v.hits} == {"r1", "r2"}
     x, y, w, h = v.view_box
-    assert w > 600 and h > 600  # the 600 m carriageways fit
+    assert w < 600  # framed on the ramps, not on the 600 m carriageways
+    inside = [(float(a), float(b)) for _, pts in v.hits for a, b in
+              (p.split(",") for p in pts.split())]
+    assert all(x <= a <= x + w and y <= b <= y + h for a, b in inside)  # every ramp in view
+    labels = {e: (a, b) for e, a, b in v.labels}
+    assert all(x <= labels[r][0] <= x + w and y <= labels[r][1] <= y + h
+               for r in ("A1", "A2", "B1", "B2"))  # road names where the roads enter the view
 
 
 def make_geometry():

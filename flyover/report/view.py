@@ -105,6 +105,21 @@ def _ramp_centre(ramp, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return x, y, z, smp.s
 
 
+def _entry(x: float, y: float, ux: float, uy: float, length: float,
+           frame: tuple[float, float, float, float]) -> float | None:
+    """Where (station) the segment from (x, y) along (ux, uy) for ``length`` enters the
+    rectangle ``frame`` (x0, x1, y0, y1), ``None`` if it misses it (Liang–Barsky)."""
+    lo, hi = 0.0, length
+    for p, d, a, b in ((x, ux, frame[0], frame[1]), (y, uy, frame[2], frame[3])):
+        if abs(d) < 1e-12:
+            if not a <= p <= b:
+                return None
+            continue
+        t0, t1 = sorted(((a - p) / d, (b - p) / d))
+        lo, hi = max(lo, t0), min(hi, t1)
+    return lo if lo <= hi else None
+
+
 def plan_view(geometry: InterchangeGeometry, extra: Mapping[str, Mapping[str, Any]] | None = None
               ) -> PlanView:
     """The plan view of ``geometry``; ``extra`` adds facts per element to the hover box
@@ -116,6 +131,9 @@ def plan_view(geometry: InterchangeGeometry, extra: Mapping[str, Mapping[str, An
     info: dict[str, dict[str, Any]] = {}
     xs: list[float] = []
     ys: list[float] = []
+    rxs: list[float] = []  # the ramps' extent: what the view frames first
+    rys: list[float] = []
+    centre: list[tuple[str, float, float, float, float, float]] = []
     for road in geometry.roads:
         width = road.lanes * geometry.lane_width_m
         h = road.heading_rad
@@ -128,9 +146,7 @@ def plan_view(geometry: InterchangeGeometry, extra: Mapping[str, Mapping[str, An
         xs += list(px)
         ys += list(py)
         pieces.append((road.z_m, road.id, "road", "polygon", _points(px, py), 0.0))
-        lx, ly = x0 + ux * min(80.0, road.length_m / 2) + nx * width / 2, \
-            y0 + uy * min(80.0, road.length_m / 2) + ny * width / 2
-        labels.append((road.id, lx, -ly))
+        centre.append((road.id, x0 + nx * width / 2, y0 + ny * width / 2, ux, uy, road.length_m))
         info[road.id] = {"kind": "road", "name": road.id, "expressway": road.expressway,
                          "lanes": road.lanes, "height_m": road.z_m, "length_m": road.length_m}
     for ramp in geometry.ramps:
@@ -138,8 +154,8 @@ def plan_view(geometry: InterchangeGeometry, extra: Mapping[str, Mapping[str, An
             continue
         width = ramp.lanes * geometry.ramp_lane_width_m
         x, y, z, s = _ramp_centre(ramp, width)
-        xs += [float(x.min()) - width, float(x.max()) + width]
-        ys += [float(y.min()) - width, float(y.max()) + width]
+        rxs += [float(x.min()) - width, float(x.max()) + width]
+        rys += [float(y.min()) - width, float(y.max()) + width]
         n = max(1, math.ceil(float(s[-1]) / PIECE_M))
         cuts = np.searchsorted(s, np.linspace(0.0, float(s[-1]), n + 1)[1:-1])
         bounds = [0, *cuts.tolist(), len(s) - 1]
@@ -173,11 +189,18 @@ def plan_view(geometry: InterchangeGeometry, extra: Mapping[str, Mapping[str, An
         # higher on top; at one height roads under ramps; stable order otherwise
         for zp, element, kind, tag, pts, w in sorted(pieces, key=lambda p: (round(p[0], 3),
                                                                              p[2] == "ramp")))
-    if xs:
-        pad = 20.0
-        x0, x1, y0, y1 = min(xs) - pad, max(xs) + pad, -max(ys) - pad, -min(ys) + pad
+    # frame the ramps (the carriageways run on beyond, a zoom out away), else everything
+    fx, fy = (rxs, rys) if rxs else (xs, ys)
+    if fx:
+        pad = max(30.0, 0.06 * max(max(fx) - min(fx), max(fy) - min(fy)))
+        x0, x1, y0, y1 = min(fx) - pad, max(fx) + pad, min(fy) - pad, max(fy) + pad
     else:
         x0, x1, y0, y1 = -100.0, 100.0, -100.0, 100.0
+    for road_id, cx, cy, ux, uy, length in centre:
+        s_in = _entry(cx, cy, ux, uy, length, (x0, x1, y0, y1))
+        s_label = min(s_in + 0.04 * (x1 - x0), length) if s_in is not None else length / 2
+        labels.insert(0, (road_id, cx + ux * s_label, -(cy + uy * s_label)))
+    x0, x1, y0, y1 = x0, x1, -y1, -y0  # view coordinates: y south
     legend = tuple(viridis_hex(i / 8) for i in range(9))
     return PlanView((round(x0, 1), round(y0, 1), round(x1 - x0, 1), round(y1 - y0, 1)),
                     shapes, tuple(hits), tuple(labels), (zmin, zmax), legend, info)
