@@ -239,3 +239,8 @@ def test_geometry_without_its_timing_table_is_still_shown(tmp_path):
     build_report(res)
     html = text(res / "report" / "classes" / f"{CLASS}.html")
     assert "ramps within their targets" in html and "geometry_timing" not in html
+
+
+def test_problem_tables_link_each_interchange_to_its_page(complete):
+    index = text(complete / "report" / "index.html")
+    assert f'<a href="interchanges/{CLASS}/1.html">1</a>' in index  # the failed asam_qc

@@ -173,6 +173,9 @@ class _Writer:
         self.tmp = tmp
         # results as seen from the final output folder (the report moves there)
         self.res_from_out = Path(os.path.relpath(results.root.resolve(), final.resolve()))
+        #: "{class_id}/{sample}" of every interchange page written so far (tables link them)
+        self.interchange_pages: set[str] = set()
+        self.env.globals["interchange_pages"] = self.interchange_pages
 
     def page(self, relpath: str, template: str, **context) -> None:
         depth = relpath.count("/")
@@ -264,6 +267,7 @@ def _interchange_page(writer: _Writer, results: Results, class_id: str, info: Ma
     except FlyoverError as exc:  # one unreadable file is a note on its page, not no report
         log.warning("report: %s", exc.one_line())
         view_error = exc.one_line()
+    writer.interchange_pages.add(f"{class_id}/{s}")
     writer.page(
         f"interchanges/{class_id}/{s}.html", "interchange.html",
         class_id=class_id, cls=info, row=row, view=view, view_error=view_error,
