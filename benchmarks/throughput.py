@@ -17,8 +17,8 @@ every density of the config (``--configfile``, default config/config.yaml):
   through libsumo in-process and through the ``sumo`` binary on the same network,
   route file, seed and options: CPU seconds of each and libsumo's overhead, and
   whether they inserted and arrived the same vehicles;
-* ``--step-check N``: N runs at step length 0.5 s against the config's (1 s):
-  throughput and wall (a setting for speed must not change the throughput);
+* ``--step-check N``: N runs at half the config's step length: throughput and CPU
+  (a setting for speed must not change the throughput);
 * the cost of the default experiment (``samples_per_class`` per class) and of the
   paper's (20 per class, config/paper.yaml) on 2 cores, from the mean CPU per
   interchange (all densities) measured here.
@@ -76,9 +76,8 @@ def binary_run(net, flows, d, seed, s) -> tuple[float, float, int, int]:
     import re
 
     ins = int(re.search(r'<vehicles [^>]*inserted="(\d+)"', text)[1])
-    arr = int(re.search(r'<vehicleTripStatistics [^>]*count="(\d+)"', text)[1]) \
-        if 'vehicleTripStatistics' in text else -1
-    return wall, cpu, ins, arr
+    running = int(re.search(r'<vehicles [^>]*running="(\d+)"', text)[1])
+    return wall, cpu, ins, ins - running
 
 
 def main() -> None:
@@ -89,6 +88,7 @@ def main() -> None:
     ap.add_argument("--classes", default="", help="comma-separated class ids (default: all)")
     ap.add_argument("--densities", default="", help="comma-separated (default: config's)")
     ap.add_argument("--compare", type=int, default=0)
+    ap.add_argument("--repeat", type=int, default=3, help="repeats of each --compare run")
     ap.add_argument("--step-check", type=int, default=0)
     args = ap.parse_args()
     s = ThroughputSettings.from_config(load_config(args.configfile))
@@ -152,28 +152,32 @@ def main() -> None:
               f" s, p95 {p95(allw):.2f} s, {len(allw)} runs; mean {mean_ic:.1f} s per interchange "
               "(all densities)")
         for label, kk in (("default", s.samples_per_class), ("paper", 20)):
-            n = sum(min(kk, len(v)) if kk else len(v) for v in by_class.values())
-            print(f"  {label:8s} ({kk} per class, {n} interchanges, {n * len(s.densities)} runs of "
-                  f"{n_cls} classes): {n * mean_ic / 60:.1f} CPU min, ~{n * mean_ic / 120:.1f} min "
-                  f"on 2 cores")
+            n = kk * n_cls  # catalog classes hold 64-108 interchanges each: kk of each
+            print(f"  {label:8s} ({kk} per class x {n_cls} classes = {n} interchanges, "
+                  f"{n * len(s.densities)} runs): {n * mean_ic / 60:.1f} CPU min, "
+                  f"~{n * mean_ic / 120:.1f} min on 2 cores")
     if args.compare:
         print("\nlibsumo (in-process, stepped from Python) vs sumo binary, same files and options:")
         top = max(s.densities)
         cmp_runs = [r for r in runs if r[2] == top][: args.compare]
         over = []
         for c, smp, d, net, flows, seed in cmp_runs:
-            tb, cb, ins_b, arr_b = binary_run(net, flows, d, seed, s)
-            res, _ = run_one(net, flows, d, seed, s)
+            bins, libs = [], []
+            for _ in range(args.repeat):  # interleaved; the least CPU of each is its cost
+                bins.append(binary_run(net, flows, d, seed, s))
+                libs.append(run_one(net, flows, d, seed, s)[0])
+            tb, cb, ins_b, arr_b = min(bins, key=lambda t: t[1])
+            res = min(libs, key=lambda r: r.cpu_s)
             ins_l, arr_l = int(res.entered.sum()), int(res.left.sum())
             over.append(res.cpu_s / cb - 1)
             print(f"  {names.get(c, c):18s} {smp:3d} {d:6.0f}: CPU libsumo {res.cpu_s:6.2f} s, "
-                  f"sumo {cb:6.2f} s, overhead {100 * over[-1]:+5.1f} % (wall {res.wall_s:.2f} vs "
-                  f"{tb:.2f} s); inserted {ins_l}/{ins_b}"
+                  f"sumo {cb:6.2f} s, overhead {100 * over[-1]:+5.1f} % (least of {args.repeat}; "
+                  f"wall {res.wall_s:.2f} vs {tb:.2f} s); inserted {ins_l}/{ins_b}"
                   f" arrived {arr_l}/{arr_b} {'same' if (ins_l, arr_l) == (ins_b, arr_b) else 'DIFFER'}")
         print(f"  median overhead {100 * statistics.median(over):+.1f} %")
     if args.step_check:
-        print("\nstep length 0.5 s vs the config's:")
-        half = replace(s, step_length_s=0.5)
+        print(f"\nstep length {s.step_length_s / 2:g} s vs the config's {s.step_length_s:g} s:")
+        half = replace(s, step_length_s=s.step_length_s / 2)
         top = max(s.densities)
         for c, smp, d, net, flows, seed in [r for r in runs if r[2] in (min(s.densities), top)][
                 : args.step_check]:

@@ -28,6 +28,7 @@ STAGE_CLIS = (
     "flyover.traffic.cli",
     "flyover.plugins.cli",
     "flyover.analytics.cli",
+    "flyover.report.cli",
     "flyover.summary",
 )
 

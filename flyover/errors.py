@@ -26,9 +26,11 @@ class FlyoverError(Exception):
     """
 
     def __init__(self, reason: str, *, source: str | None = None, element: str | None = None):
-        self.reason = reason
+        # text from the data may hold line breaks: reason and element stay one line
+        # wherever they are shown (console, rejected.parquet, index.json)
+        self.reason = _printable(str(reason))
         self.source = source
-        self.element = element
+        self.element = None if element is None else _printable(str(element))
         super().__init__(self.one_line())
 
     def one_line(self) -> str:
@@ -36,8 +38,8 @@ class FlyoverError(Exception):
         characters from the data are shown escaped, e.g. ``\\n``)."""
         where = _printable(self.source or "<memory>")
         if self.element:
-            where += f": {_printable(str(self.element))}"
-        return f"{where}: {_printable(self.reason)}"
+            where += f": {self.element}"
+        return f"{where}: {self.reason}"
 
     def located(self, source: str) -> "FlyoverError":
         """Return the same error attributed to ``source`` if it had none."""

@@ -38,7 +38,7 @@ from flyover.errors import FlyoverError
 LONG = os.environ.get("FLYOVER_FUZZ", "") == "long"
 FUZZ_EXAMPLES = int(os.environ.get("FLYOVER_FUZZ_EXAMPLES", 3000 if LONG else 150))
 HANG_SECONDS = 20
-DEADLINE = timedelta(seconds=5)
+DEADLINE = timedelta(seconds=10)  # generous: the machine is shared; a hang is caught by HANG_SECONDS
 
 #: hypothesis settings of every fuzz test (no example database: nothing is written to the repo)
 FUZZ = settings(

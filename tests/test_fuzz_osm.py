@@ -30,8 +30,9 @@ from flyover.osm import OsmOptions, read_osm_topologies
 from flyover.topology.names import is_safe_name
 from tests.fuzz_support import (
     HOSTILE_WORDS,
-    fuzz,
     assert_names_file,
+    fuzz,
+    hard_timeout,
     import_stays_inside,
     loads_or_names_file,
     mutated_xml,
@@ -41,8 +42,8 @@ from tests.fuzz_support import (
 
 #: the team's shared extracts: FLYOVER_OSM_DIR, else ../shared/osm beside the checkout
 OSM_DIR = Path(os.environ.get("FLYOVER_OSM_DIR") or Path(__file__).resolve().parents[2] / "shared" / "osm")
-pytestmark = pytest.mark.skipif(not OSM_DIR.is_dir(), reason=f"no real OSM extracts at {OSM_DIR} "
-                                "(ODbL data is read from the shared folder, never copied here)")
+needs_osm = pytest.mark.skipif(not OSM_DIR.is_dir(), reason=f"no real OSM extracts at {OSM_DIR} "
+                               "(ODbL data is read from the shared folder, never copied here)")
 
 _NETWORK = {"motorway", "motorway_link", "trunk", "trunk_link"}
 WORDS = ["motorway", "motorway_link", "trunk", "trunk_link", "primary", "residential", "yes", "no", "-1",
@@ -95,6 +96,7 @@ def mutated_osm(draw) -> str:
     return text
 
 
+@needs_osm
 def test_seeds_are_the_real_interchanges():
     """The cut-down networks still hold the extracts' interchanges (mutations start from them)."""
     with sandbox() as root:
@@ -103,6 +105,7 @@ def test_seeds_are_the_real_interchanges():
     assert found >= 10
 
 
+@needs_osm
 @fuzz(0.7)
 @given(text=mutated_osm(), options=st.sampled_from(OPTIONS), do_import=st.integers(0, 7))
 def test_fuzz_osm_loads_or_names_the_file(text, options, do_import):
@@ -129,6 +132,7 @@ def _import(path: Path, root: Path, options: OsmOptions) -> dict:
         osm.default_options = saved
 
 
+@needs_osm
 @fuzz(0.3)
 @given(seed=st.sampled_from(SEEDS), ref=st.sampled_from(HOSTILE_WORDS) | st.text(min_size=1, max_size=60))
 def test_fuzz_hostile_refs_give_safe_stable_names_shown_in_the_index(seed, ref):
@@ -151,6 +155,7 @@ def test_fuzz_hostile_refs_give_safe_stable_names_shown_in_the_index(seed, ref):
             assert written["interchanges"] == index["interchanges"]
 
 
+@needs_osm
 def test_refs_with_slashes_and_semicolons_are_mapped_and_shown(tmp_path):
     """A ref such as 'A 1/E 20;../x' (real data has '/', ';' and spaces) becomes a safe part."""
     seed = "13_pt_porto_a41_a43.osm"
@@ -172,3 +177,41 @@ def test_unknown_xml_encoding_is_named(tmp_path):
     with pytest.raises(FlyoverError, match="malformed OSM XML") as info:
         read_osm_topologies(path, OsmOptions())
     assert_names_file(info.value, path)
+
+
+def _tiny_osm(lat_far: str = "0.001") -> str:
+    """Two motorways crossing, joined by one link whose middle node lies at ``lat_far``."""
+    nodes = {1: (0, -0.01), 2: (0, 0.01), 3: (-0.01, 0.002), 4: (0.01, 0.002), 5: (0, -0.002),
+             6: (lat_far, 0.0), 7: (0.008, 0.002)}
+    ways = [(10, [1, 5, 2], "motorway", "A 1"), (11, [3, 7, 4], "motorway", "B 2"),
+            (12, [5, 6, 7], "motorway_link", None)]
+    out = ["<?xml version='1.0' encoding='UTF-8'?>", '<osm version="0.6">']
+    out += [f'  <node id="{k}" lat="{la}" lon="{lo}"/>' for k, (la, lo) in nodes.items()]
+    for wid, nds, hw, ref in ways:
+        out.append(f'  <way id="{wid}">' + "".join(f'<nd ref="{n}"/>' for n in nds)
+                   + f'<tag k="highway" v="{hw}"/><tag k="oneway" v="yes"/>'
+                   + (f'<tag k="ref" v="{ref}"/>' if ref else "") + "</way>")
+    return "\n".join(out + ["</osm>", ""])
+
+
+@pytest.mark.parametrize("lat", ["89.9", "1e5", "nan", "inf", "-91"])
+def test_coordinates_far_or_off_the_globe_stay_bounded(tmp_path, lat):
+    """Found by the long fuzz run: a link node moved to lat 1e5 made a ramp astronomically
+    long and min_radius tried to resample it every 10 m (a hang, or numpy's 'Maximum allowed
+    size exceeded'). Coordinates off the globe are now treated as missing nodes, and
+    min_radius takes at most MAX_SAMPLES points whatever the length."""
+    path = write_text(tmp_path / "far.osm", _tiny_osm(lat))
+    found = loads_or_names_file(lambda p: read_osm_topologies(p, OsmOptions()), path)
+    for t in found or []:
+        assert is_safe_name(t.name)
+
+
+def test_min_radius_work_is_bounded_by_max_samples():
+    import numpy as np
+
+    from flyover.osm.geom import MAX_SAMPLES, min_radius
+
+    xy = np.array([[0.0, 0.0], [1e12, 0.0], [1e12, 1e12]])
+    with hard_timeout(10):
+        r = min_radius(xy)
+    assert r > 1e12 / MAX_SAMPLES

@@ -155,3 +155,15 @@ def test_control_characters_in_ids_are_refused_at_read_not_crash_the_import(tmp_
     with sandbox() as root:
         index = import_stays_inside([path], root)
     assert not index["interchanges"] and "printable" in index["rejected"][0]["reason"]
+
+
+def test_rejection_reason_from_data_with_line_breaks_stays_one_line(tmp_path):
+    """Found by the long fuzz run: a key "\\n" gave the rejected row a reason with a raw line
+    break (index.json, rejected.parquet); reason and element are now kept printable."""
+    path = tmp_path / "in" / "k.yaml"
+    path.parent.mkdir()
+    path.write_text('"\\n": 1\nexpressways: {A: [A1]}\n')
+    with sandbox() as root:
+        index = import_stays_inside([path], root)
+    [row] = index["rejected"]
+    assert row["reason"] == "unknown key(s): \\n" and row["element"] == "\\n"

@@ -45,17 +45,23 @@ def point_at(xy: np.ndarray, s: float) -> np.ndarray:
     return np.array([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
 
 
+#: most resampled points :func:`min_radius` takes (a 1000 km polyline at 10 m)
+MAX_SAMPLES = 100_000
+
+
 def min_radius(xy: np.ndarray, step_m: float = 10.0, chord_steps: int = 3) -> float:
     """Smallest radius of curvature of a polyline, in metres (``inf`` if straight).
 
-    The polyline is resampled every ``step_m`` and the circumradius of point
-    triples ``chord_steps`` samples apart is taken, which smooths the noise of
-    closely spaced OSM nodes.
+    The polyline is resampled every ``step_m`` (coarser for polylines longer than
+    :data:`MAX_SAMPLES` steps, so the work stays bounded whatever the coordinates)
+    and the circumradius of point triples ``chord_steps`` samples apart is taken,
+    which smooths the noise of closely spaced OSM nodes.
     """
     xy = np.asarray(xy, float)
     cum = arclength(xy)
-    if len(xy) < 3 or cum[-1] < 2 * chord_steps * step_m:
+    if len(xy) < 3 or not np.isfinite(cum[-1]) or cum[-1] < 2 * chord_steps * step_m:
         return float("inf")
+    step_m = max(step_m, float(cum[-1]) / MAX_SAMPLES)
     s = np.arange(0.0, cum[-1] + 1e-9, step_m)
     p = np.column_stack([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
     k = chord_steps

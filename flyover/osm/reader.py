@@ -99,6 +99,7 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str]) -> 
         raise InputFormatError("OSM PBF is not supported: convert it with 'osmium cat FILE -o FILE.osm'",
                                source=src)
     net = OsmNetwork(source=src)
+    bad_coords: list[int] = []
     try:
         saw_osm = False
         for el in _elements(src):
@@ -120,7 +121,11 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str]) -> 
             if el.tag == "node":
                 nid = int(el.get("id"))
                 if nid in needed:
-                    net.coords[nid] = (float(el.get("lat")), float(el.get("lon")))
+                    lat, lon = float(el.get("lat")), float(el.get("lon"))
+                    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):  # also nan
+                        bad_coords.append(nid)
+                        continue
+                    net.coords[nid] = (lat, lon)
                     for t in el:
                         if t.tag == "tag" and t.get("k") == "ele":
                             try:
@@ -142,6 +147,9 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str]) -> 
         raise InputFormatError(f"malformed OSM element: {exc}", source=src) from None
     if not saw_osm:
         raise InputFormatError("empty OSM file", source=src)
+    if bad_coords:
+        log.warning("%s: %d way node(s) with lat/lon off the globe (e.g. node %d): treated as missing",
+                    src, len(bad_coords), bad_coords[0])
     missing = needed - net.coords.keys()
     if missing:
         log.warning("%s: %d way node(s) missing from the file (e.g. node %d); their ways are cut there",

@@ -75,9 +75,9 @@ class ThroughputSettings:
 
     densities: tuple[float, ...] = (450.0, 900.0, 1350.0, 1800.0)
     duration_s: float = 2000.0
-    step_length_s: float = 1.0
+    step_length_s: float = 0.5
     interval_s: float = 30.0
-    samples_per_class: int = 3
+    samples_per_class: int = 2
     uturns: bool = False
     arrivals: Arrivals = Arrivals.POISSON
     depart_lane: DepartLane = DepartLane.FREE
