@@ -15,6 +15,7 @@ include: "workflow/rules/geometry.smk"
 include: "workflow/rules/export.smk"
 include: "workflow/rules/throughput.smk"
 include: "workflow/rules/plugins.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:
@@ -30,6 +31,7 @@ rule all:
         "results/throughput.parquet",
         "results/throughput_stats.parquet",
         plugin_class_tables,
+        "results/report/index.html",
     default_target: True
 
 
