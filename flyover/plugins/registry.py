@@ -9,6 +9,8 @@ warning naming it and the reason.
 
 from __future__ import annotations
 
+import re
+
 import logging
 from dataclasses import dataclass
 from importlib import metadata
@@ -74,6 +76,9 @@ def _check(obj: Any, name: str) -> Any:
     for attr in ("version", "table"):
         if not isinstance(getattr(obj, attr), str) or not getattr(obj, attr):
             raise PluginError(f"plugin {attr} must be a non-empty string", element=name)
+    if not re.fullmatch(r"[a-z][a-z0-9_]{0,63}", obj.table):  # it becomes results/{table}/
+        raise PluginError(f"plugin table {obj.table!r} must be a safe name "
+                          "(lower-case letters, digits, _; it becomes a folder)", element=name)
     return obj
 
 

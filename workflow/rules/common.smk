@@ -12,23 +12,22 @@ from flyover.topology.io import TOPOLOGY_SUFFIXES
 validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
-TOPOLOGY_VERSION = 2  # 2: representative.graphml per class (catalog member first)
+TOPOLOGY_VERSION = 3  # 2: representative.graphml per class; 3: safe names, FLYOVER ids
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 3
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 
 
 wildcard_constraints:
-    city=r"[A-Za-z0-9_.-]+",
+    city=r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}",
     class_id=r"c[0-9a-f]{10}",
 
 
 def city_names():
-    """Cities to build: config `cities`, else every folder of cities_dir."""
-    if config["cities"]:
-        return sorted(config["cities"])
-    root = Path(config["cities_dir"])
-    return sorted(p.name for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+    """Cities to build: config `cities`, else every folder of cities_dir (names checked)."""
+    from flyover.topology.city import city_names as checked_city_names
+
+    return checked_city_names(config["cities_dir"], config["cities"])
 
 
 CITIES = city_names()
