@@ -388,7 +388,7 @@ def _evaluation(res: Results, tmp: Path, names: Mapping[str, str]) -> dict[str, 
 
 def _assets(tmp: Path) -> None:
     (tmp / "assets").mkdir(parents=True, exist_ok=True)
-    for name in ("report.css", "viewer.js"):
+    for name in ("report.css", "viewer.js", "tables.js"):
         data = resources.files("flyover.report").joinpath("static", name).read_bytes()
         (tmp / "assets" / name).write_bytes(data)
 
