@@ -257,3 +257,10 @@ def test_a_killed_build_leaves_nothing_behind_the_next_one(tmp_path):
     fresh.mkdir()
     build_report(res)
     assert not stale.exists() and fresh.exists()
+
+
+def test_class_page_shows_its_throughput_and_fuel(complete):
+    html = text(complete / "report" / "classes" / f"{CLASS}.html")
+    assert "flyover query --named throughput-by-class" in html
+    assert "flyover query --named fuel-by-class" in html
+    assert "1350" in html or "1800" in html  # a density of its runs

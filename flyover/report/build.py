@@ -213,6 +213,8 @@ def _class_context(results: Results) -> dict[str, Any]:
         "throughput_rows": results.sql(_SAMPLE_THROUGHPUT),
         "fuel_rows": results.sql(_FUEL_ROWS),
         "fuel_per_interchange": results.sql(_FUEL_BY_INTERCHANGE),
+        "throughput_by_class": results.named("throughput-by-class"),
+        "fuel_by_class": results.named("fuel-by-class"),
     }
     grouped = {k: results.by_class(v) for k, v in t.items()}
     return {"tables": t, "grouped": grouped}
