@@ -25,9 +25,11 @@ rule geometry_class:
         seed=config["seed"],
         folder="results/interchanges/{class_id}",
     threads: 1
+    # measured per Slurm job (README "Running on a cluster"): peak 0.65 GB; CPU 3.5 s
+    # start-up + up to 5.5 s per interchange (stack4) -> 106 interchanges in ~10 min
     resources:
-        mem_mb=1000,
-        runtime=30,
+        mem_mb=1200,
+        runtime=60,
     benchmark:
         "logs/benchmarks/geometry/{class_id}.tsv"
     script:
