@@ -5,7 +5,7 @@ slurm-wlm and munge, installed if missing and we are root); a city of one interc
 directional Y, two ramps, t = 1: 8 interchanges) goes through topology, sampling, geometry,
 export and validation as Slurm jobs, and every file under results/ must be the bytes a local
 run (`snakemake -j2`) makes, apart from the fitting times. Opt-in (`-m slurm`, about
-4 minutes); skipped with the reason where Slurm cannot be installed or started.
+2.5 minutes on 2 cores); skipped with the reason where Slurm cannot be installed or started.
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def test_a_city_built_as_slurm_jobs_is_the_local_run_byte_for_byte(slurm, tmp_pa
 
     # every job but the target rules went through sbatch and ended COMPLETED in Slurm
     submitted = re.findall(r"has been submitted with SLURM jobid (\d+)", log)
-    rules = set(re.findall(r"^rule (\w+):", log, re.M))
+    rules = set(re.findall(r"^(?:rule|checkpoint) (\w+):", log, re.M))
     assert {"import_city", "classify", "class_topology", "sample_class", "coverage_table",
             "geometry_class", "export_class", "validate_class", "validation"} <= rules
     assert len(submitted) == len(re.findall(r"^(?:rule|checkpoint) \w+:", log, re.M))
