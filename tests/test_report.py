@@ -244,3 +244,23 @@ def test_geometry_without_its_timing_table_is_still_shown(tmp_path):
 def test_problem_tables_link_each_interchange_to_its_page(complete):
     index = text(complete / "report" / "index.html")
     assert f'<a href="interchanges/{CLASS}/1.html">1</a>' in index  # the failed asam_qc
+
+
+def test_a_killed_build_leaves_nothing_behind_the_next_one(tmp_path):
+    import os  # noqa: PLC0415
+
+    res = make_results(tmp_path, ("topology",))
+    stale = res / ".report.abc.tmp"
+    (stale / "classes").mkdir(parents=True)
+    os.utime(stale, (0, 0))
+    fresh = res / ".report.def.tmp"  # another build, running now
+    fresh.mkdir()
+    build_report(res)
+    assert not stale.exists() and fresh.exists()
+
+
+def test_class_page_shows_its_throughput_and_fuel(complete):
+    html = text(complete / "report" / "classes" / f"{CLASS}.html")
+    assert "flyover query --named throughput-by-class" in html
+    assert "flyover query --named fuel-by-class" in html
+    assert "1350" in html or "1800" in html  # a density of its runs

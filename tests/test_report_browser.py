@@ -103,3 +103,19 @@ def test_screenshots_of_the_overview_and_a_class_page(browser, report):
     page = rb.screenshot(browser, report / "screenshot-class.png")
     for shot in (overview, page):
         assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 10_000
+
+
+def test_a_column_head_sorts_its_table(browser, report):
+    rb.open_page(browser, report / "classes" / f"{CLASS}.html")
+    head = browser.find_element("css selector", "#files table.data thead th:first-child")
+
+    def samples():
+        return [c.text for c in browser.find_elements(
+            "css selector", "#files table.data tbody td:first-child")]
+
+    assert samples() == ["0", "1", "2"]
+    head.click()
+    head.click()  # again: descending
+    assert samples() == ["2", "1", "0"]
+    assert head.get_attribute("aria-sort") == "descending"
+    assert rb.console_errors(browser) == []

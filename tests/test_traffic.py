@@ -78,9 +78,12 @@ def test_bad_throughput_config_names_the_key(section, element):
     assert info.value.element == element
 
 
-def test_interval_must_divide_into_steps():
+def test_interval_must_divide_into_steps_and_the_run_into_intervals():
     with pytest.raises(ConfigError):
         ThroughputSettings(step_length_s=0.7, interval_s=30.0)
+    with pytest.raises(ConfigError):
+        ThroughputSettings(duration_s=2000.0, interval_s=30.0)  # 66.7 intervals
+    assert ThroughputSettings(duration_s=2000.0, interval_s=20.0).interval_s == 20.0
 
 
 def test_seeds_differ_per_run_and_repeat():

@@ -50,7 +50,7 @@ def test_below_capacity_throughput_is_the_sum_of_the_flows(t_net):
     # arrivals: Poisson with mean 1800 / h over 1200 s, all but the last few in the network
     assert abs(r["entered"] - 600) < 4 * 600 ** 0.5
     assert 0 <= r["entered"] - r["left"] == r["running_end"] < 40
-    assert len(series) == 40 and series[-1]["in_network"] == r["running_end"]
+    assert len(series) == 60 and series[-1]["in_network"] == r["running_end"]
 
 
 def test_same_seed_gives_the_same_table_bytes(t_net, tmp_path):

@@ -213,6 +213,8 @@ def _class_context(results: Results) -> dict[str, Any]:
         "throughput_rows": results.sql(_SAMPLE_THROUGHPUT),
         "fuel_rows": results.sql(_FUEL_ROWS),
         "fuel_per_interchange": results.sql(_FUEL_BY_INTERCHANGE),
+        "throughput_by_class": results.named("throughput-by-class"),
+        "fuel_by_class": results.named("fuel-by-class"),
     }
     grouped = {k: results.by_class(v) for k, v in t.items()}
     return {"tables": t, "grouped": grouped}
@@ -304,6 +306,7 @@ def build_report(results: str | os.PathLike = "results", out: str | os.PathLike 
     res = Results(Path(results))
     final = Path(out) if out is not None else res.root / "report"
     final.parent.mkdir(parents=True, exist_ok=True)
+    _remove_leftovers(final)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
     try:
         writer = _Writer(res, tmp, final)
@@ -388,9 +391,20 @@ def _evaluation(res: Results, tmp: Path, names: Mapping[str, str]) -> dict[str, 
 
 def _assets(tmp: Path) -> None:
     (tmp / "assets").mkdir(parents=True, exist_ok=True)
-    for name in ("report.css", "viewer.js"):
+    for name in ("report.css", "viewer.js", "tables.js"):
         data = resources.files("flyover.report").joinpath("static", name).read_bytes()
         (tmp / "assets" / name).write_bytes(data)
+
+
+def _remove_leftovers(final: Path, age_s: float = 3600.0) -> None:
+    """Remove the temporary folders of builds that were killed (older than ``age_s``: a
+    build running now beside this one keeps its own)."""
+    import time  # noqa: PLC0415
+
+    for p in final.parent.glob(f".{final.name}.*"):
+        if p.is_dir() and (p.name.endswith(".tmp") or ".old." in p.name) and \
+                time.time() - p.stat().st_mtime > age_s:
+            shutil.rmtree(p, ignore_errors=True)
 
 
 def _swap(tmp: Path, final: Path) -> None:

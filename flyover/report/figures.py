@@ -118,6 +118,7 @@ def plot_class_geometry(rows: Sequence[Mapping], path: str | os.PathLike, *,
     slope against the target, and ramp lengths."""
     plt = _pyplot()
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(10.5, 3.2))
+    rows = sorted(rows, key=lambda r: bool(r["ok"]), reverse=True)  # missed ones on top
     finite = [r["target_radius_m"] for r in rows if math.isfinite(r["target_radius_m"])]
     inf_x = 1.25 * max(finite) if finite else 100.0
     colour = ["#2e86c1" if r["ok"] else "#c0392b" for r in rows]
@@ -125,7 +126,9 @@ def plot_class_geometry(rows: Sequence[Mapping], path: str | os.PathLike, *,
     yr = [min(r["min_radius_m"], 4 * inf_x) for r in rows]
     a.scatter(xr, yr, s=9, c=colour, alpha=0.7)
     lim = max(finite + [10.0]) * 1.05
-    a.plot([0, lim], [0, lim], color="0.5", lw=0.8)
+    lo = 0.8 * min(finite + [lim])
+    diagonal = [lo + (lim - lo) * i / 100 for i in range(101)]  # y = x: a curve on a log axis
+    a.plot(diagonal, diagonal, color="0.5", lw=0.8)
     a.axvline(inf_x, color="0.85", lw=0.8)
     a.text(inf_x, 0.02, " target ∞", transform=a.get_xaxis_transform(), fontsize=7, color="0.4")
     a.set_xlabel("target radius (m)")

@@ -104,11 +104,11 @@ def plot_class_throughput(rows: Sequence[dict], names: Mapping[str, str],
         sd = [np.std(vals[(c, d)], ddof=1) if len(vals.get((c, d), [])) > 1 else 0.0
               for c in classes]
         ax.bar(x + (i - (len(ds) - 1) / 2) * width, m, width, yerr=sd, capsize=2,
-               label=f"{d:g} veh/h")
+               label=f"{d:g} veh/h per movement")
     ax.set_xticks(x, [_name(names, c) + ("*" if c in flagged else "") for c in classes],
                   rotation=35, ha="right", fontsize=8)
     ax.set_ylabel("stable throughput (veh/h)")
-    ax.set_title("class-average throughput per density per movement"
+    ax.set_title("class-average stable throughput (whiskers: sd over samples)"
                  + (" (* runs with teleports/collisions)" if flagged else ""), fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -124,7 +124,8 @@ def plot_pvalues(stats: Sequence[dict], names: Mapping[str, str], path: str | os
                      key=lambda c: _name(names, c))
     idx = {c: i for i, c in enumerate(classes)}
     n = max(len(ds), 1)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n + 1, 4.4), squeeze=False)
+    fig, axes = plt.subplots(1, n, figsize=(3.6 * n + 1.2, 4.4), squeeze=False,
+                             layout="constrained")
     im = None
     for ax, d in zip(axes[0], ds):
         m = np.full((len(classes), len(classes)), np.nan)

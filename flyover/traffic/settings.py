@@ -76,7 +76,7 @@ class ThroughputSettings:
     densities: tuple[float, ...] = (450.0, 900.0, 1350.0, 1800.0)
     duration_s: float = 2000.0
     step_length_s: float = 0.5
-    interval_s: float = 30.0
+    interval_s: float = 20.0
     samples_per_class: int = 2
     uturns: bool = False
     arrivals: Arrivals = Arrivals.POISSON
@@ -94,9 +94,11 @@ class ThroughputSettings:
         if self.interval_s < self.step_length_s or self.duration_s < 2 * self.interval_s:
             raise ConfigError("need step_length_s <= interval_s <= duration_s / 2",
                               element="throughput.interval_s")
-        if abs(self.interval_s / self.step_length_s - round(self.interval_s / self.step_length_s)) > 1e-9:
-            raise ConfigError("interval_s must be a multiple of step_length_s",
-                              element="throughput.interval_s")
+        for whole, part in ((self.interval_s, self.step_length_s), (self.duration_s, self.interval_s)):
+            if abs(whole / part - round(whole / part)) > 1e-9:
+                raise ConfigError("duration_s must be a multiple of interval_s, and interval_s of "
+                                  "step_length_s (a partial last interval would bias the series)",
+                                  element="throughput.interval_s")
 
     @classmethod
     def from_config(cls, config: Mapping[str, Any]) -> "ThroughputSettings":

@@ -13,14 +13,18 @@
 # variable, SLURM_CONF too, before its `srun`, which then finds no configuration ("srun:
 # fatal: Could not establish a configuration source"). A machine that already has an
 # /etc/slurm/slurm.conf of its own is refused (exit 2), never changed. The daemons use their
-# own ports (FLYOVER_SLURM_PORT, default 16817, and the next one) and munge socket. No accounting
-# database: the Snakemake executor is told to ask squeue for job states (MinJobAge = 1 h
-# keeps finished jobs visible to it); see README "Running on a cluster".
+# own ports (FLYOVER_SLURM_PORT, default 16817, and the next three) and munge socket.
+# No accounting database by default: the Snakemake executor is told to ask squeue for job
+# states (MinJobAge = 1 h keeps finished jobs visible to it); see README "Running on a
+# cluster". FLYOVER_SLURM_ACCOUNTING=1 adds one (slurmdbd and MariaDB, installed if missing,
+# the database in DIR/db on a private port): sacct then answers, as on most clusters, with
+# each job's MaxRSS and TotalCPU.
 # Exit status 2 with one line on stderr when Slurm cannot be installed or started here.
 set -eu
 cmd=${1:-}
 D=${2:-/tmp/flyover-slurm}
 PORT=${FLYOVER_SLURM_PORT:-16817}
+ACCOUNTING=${FLYOVER_SLURM_ACCOUNTING:-0}
 NODE=$(hostname -s)
 
 fail() { echo "slurm.sh: $*" >&2; exit 2; }
@@ -32,6 +36,60 @@ install() {
     echo "slurm.sh: installing slurm-wlm and munge (apt-get)" >&2
     { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurm-wlm munge; } \
         >"$D/apt.log" 2>&1 || fail "apt-get install slurm-wlm munge failed (see $D/apt.log)"
+}
+
+install_accounting() {
+    command -v slurmdbd >/dev/null && command -v mariadbd >/dev/null && return 0
+    [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null ||
+        fail "slurmdbd and mariadb-server are not installed, and apt-get as root is not available"
+    echo "slurm.sh: installing slurmdbd and mariadb-server (apt-get)" >&2
+    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurmdbd mariadb-server; } \
+        >"$D/apt-accounting.log" 2>&1 ||
+        fail "apt-get install slurmdbd mariadb-server failed (see $D/apt-accounting.log)"
+}
+
+# MariaDB in DIR/db (socket DIR/db/mysql.sock, TCP 127.0.0.1:PORT+2), slurmdbd on PORT+3
+accounting_up() {
+    install_accounting
+    if [ ! -d "$D/db/mysql" ]; then
+        mariadb-install-db --no-defaults --datadir="$D/db" --user=root --skip-test-db \
+            >"$D/log/mariadb-install.log" 2>&1 || fail "mariadb-install-db failed (see $D/log/mariadb-install.log)"
+    fi
+    mariadbd --no-defaults --datadir="$D/db" --socket="$D/db/mysql.sock" --bind-address=127.0.0.1 \
+        --port=$((PORT + 2)) --pid-file="$D/db/mariadb.pid" --user=root \
+        --log-error="$D/log/mariadb.log" >/dev/null 2>&1 &
+    i=0
+    until mariadb --no-defaults --socket="$D/db/mysql.sock" -e "select 1" >/dev/null 2>&1; do
+        i=$((i + 1)); [ $i -le 60 ] || fail "MariaDB did not start in 60 s (see $D/log/mariadb.log)"; sleep 1
+    done
+    mariadb --no-defaults --socket="$D/db/mysql.sock" -e "
+        CREATE USER IF NOT EXISTS 'slurm'@'127.0.0.1' IDENTIFIED BY 'flyover-test';
+        GRANT ALL ON slurm_acct_db.* TO 'slurm'@'127.0.0.1';" ||
+        fail "cannot create the slurm database user"
+    cat >"$D/slurmdbd.conf" <<CONF
+AuthType=auth/munge
+AuthInfo=socket=$D/munge/munge.socket
+DbdHost=localhost
+DbdAddr=127.0.0.1
+DbdPort=$((PORT + 3))
+SlurmUser=root
+PidFile=$D/slurmdbd.pid
+LogFile=$D/log/slurmdbd.log
+StorageType=accounting_storage/mysql
+StorageHost=127.0.0.1
+StoragePort=$((PORT + 2))
+StorageUser=slurm
+StoragePass=flyover-test
+StorageLoc=slurm_acct_db
+CONF
+    chmod 600 "$D/slurmdbd.conf"
+    # slurmdbd reads slurmdbd.conf beside $SLURM_CONF
+    slurmdbd || fail "slurmdbd did not start (see $D/log/slurmdbd.log)"
+    i=0
+    until sacctmgr -n list cluster >/dev/null 2>&1; do
+        i=$((i + 1)); [ $i -le 60 ] || fail "slurmdbd did not answer in 60 s (see $D/log/slurmdbd.log)"; sleep 1
+    done
+    sacctmgr -i add cluster flyover-test >/dev/null 2>&1 || true
 }
 
 config() {
@@ -62,8 +120,19 @@ SchedulerType=sched/backfill
 ReturnToService=2
 MinJobAge=3600
 MpiDefault=none
+$(if [ "$ACCOUNTING" = 1 ]; then cat <<ACC
+JobAcctGatherType=jobacct_gather/linux
+JobAcctGatherFrequency=1
+AccountingStorageType=accounting_storage/slurmdbd
+AccountingStorageHost=127.0.0.1
+AccountingStoragePort=$((PORT + 3))
+AccountingStoragePass=$D/munge/munge.socket
+ACC
+else cat <<ACC
 JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
+ACC
+fi)
 JobCompType=jobcomp/none
 NodeName=$NODE NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem State=UNKNOWN
 PartitionName=debug Nodes=$NODE Default=YES MaxTime=INFINITE State=UP
@@ -91,6 +160,7 @@ up() {
             { down; fail "cannot link /etc/slurm/slurm.conf to $D/slurm.conf"; }
     fi
     export SLURM_CONF="$D/slurm.conf"
+    if [ "$ACCOUNTING" = 1 ]; then accounting_up; fi
     slurmctld -f "$SLURM_CONF" || fail "slurmctld did not start (see $D/log/slurmctld.log)"
     # jobs run niced: the machine is shared
     nice -n 10 slurmd -f "$SLURM_CONF" -N "$NODE" || fail "slurmd did not start (see $D/log/slurmd.log)"
@@ -104,7 +174,7 @@ up() {
 }
 
 down() {
-    for f in "$D/slurmd.pid" "$D/slurmctld.pid" "$D/munge/munged.pid"; do
+    for f in "$D/slurmd.pid" "$D/slurmctld.pid" "$D/slurmdbd.pid" "$D/db/mariadb.pid" "$D/munge/munged.pid"; do
         [ -f "$f" ] || continue
         pid=$(cat "$f")
         kill "$pid" 2>/dev/null || true

@@ -24,10 +24,13 @@ rule geometry_class:
         settings=config["geometry"],
         seed=config["seed"],
         folder="results/interchanges/{class_id}",
-    threads: 2
+    threads: 2  # forked workers share the class's interchanges (flyover.parallel)
+    # measured per Slurm job (README "Running on a cluster"): peak 0.65 GB; CPU 3.5 s
+    # start-up + up to 5.5 s per interchange (stack4) -> 106 interchanges in ~10 min
+    # (per worker; with 2 workers the job needs up to about twice it)
     resources:
-        mem_mb=1000,
-        runtime=30,
+        mem_mb=2000,
+        runtime=60,
     benchmark:
         "logs/benchmarks/geometry/{class_id}.tsv"
     script:

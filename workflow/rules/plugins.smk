@@ -26,8 +26,11 @@ rule plugin_class:
     benchmark:
         "logs/benchmarks/plugins/{plugin}/{class_id}.tsv"
     threads: 1
+    # measured per Slurm job (truck_fuel): peak 0.73 GB; CPU 3.5 s + up to 0.75 s per
+    # interchange
     resources:
-        mem_mb=1000,
+        mem_mb=1200,
+        runtime=15,
     conda:
         "../envs/flyover.yaml"
     params:

@@ -23,8 +23,12 @@ rule throughput_class:
     benchmark:
         "logs/benchmarks/throughput/{class_id}.tsv"
     threads: 1
+    # measured per Slurm job: peak 0.66 GB; CPU up to 7 s per SUMO run (2000 s simulated):
+    # half a minute per run (samples x densities) leaves a loaded node 4x the time
     resources:
         mem_mb=1000,
+        runtime=5
+        + config["throughput"]["samples_per_class"] * len(config["throughput"]["densities"]) // 2,
     conda:
         "../envs/flyover.yaml"
     params:
