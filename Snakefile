@@ -18,6 +18,19 @@ include: "workflow/rules/plugins.smk"
 include: "workflow/rules/report.smk"
 
 
+# Aggregates and targets run where Snakemake runs (seconds each), not as cluster jobs.
+localrules:
+    all,
+    topology,
+    sampling,
+    coverage_table,
+    geometry,
+    geometry_table,
+    export,
+    validation,
+    plugins,
+
+
 rule all:
     input:
         "results/classes.parquet",
