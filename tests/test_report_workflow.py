@@ -4,7 +4,6 @@ changes, and opens in headless Chromium without an error (when Chromium is insta
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,30 +13,15 @@ import pytest
 import yaml
 
 from tests import report_browser as rb
+from tests.small_city import small_city
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 REPO = Path(__file__).resolve().parents[1]
 TARGET = "results/report/index.html"
 
-Y = """\
-name: y
-expressways: {A: [A1, A2], B: [B1, B2]}
-ramps:
-  rIn:  {from: A1 straight, to: B1 right @0.60}
-  rOut: {from: B2 right @0.40, to: A2 straight}
-"""
-
-
 def _snakefile(wd: Path) -> Path:
-    """The repository's Snakefile, with rule report included if it does not include it yet."""
-    main = REPO / "Snakefile"
-    if "workflow/rules/report.smk" in main.read_text(encoding="utf-8"):
-        return main
-    wrapper = wd / "Snakefile.report"
-    wrapper.write_text(f'include: "{main}"\ninclude: "{REPO / "workflow/rules/report.smk"}"\n',
-                       encoding="utf-8")
-    return wrapper
+    return REPO / "Snakefile"
 
 
 def snakemake(wd: Path, *args: str) -> subprocess.CompletedProcess:
@@ -56,17 +40,7 @@ def _jobs(log: str) -> set[str]:
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory) -> Path:
-    wd = tmp_path_factory.mktemp("report_workflow")
-    shutil.copytree(REPO / "config", wd / "config", symlinks=True)
-    city = wd / "config" / "cities" / "small"
-    city.mkdir()
-    (city / "y.yaml").write_text(Y, encoding="utf-8")
-    shutil.copy(REPO / "flyover" / "catalog" / "trumpet.yaml", city / "trumpet.yaml")
-    cfg = yaml.safe_load((wd / "config" / "config.yaml").read_text(encoding="utf-8"))
-    cfg["cities"] = ["small"]
-    cfg["sampling"]["t"] = 1
-    cfg["throughput"].update(samples_per_class=1, densities=[450, 1800], duration_s=900)
-    (wd / "config" / "config.yaml").write_text(yaml.safe_dump(cfg), encoding="utf-8")
+    wd = small_city(tmp_path_factory.mktemp("report_workflow"))
     snakemake(wd, "-j2", TARGET)
     return wd
 

@@ -24,6 +24,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.small_city import NOT_REPRODUCIBLE, Y
+
 pytestmark = [pytest.mark.slurm, pytest.mark.integration, pytest.mark.slow]
 
 REPO = Path(__file__).resolve().parents[2]
@@ -36,18 +38,6 @@ ACCOUNTING = os.environ.get("FLYOVER_SLURM_ACCOUNTING") == "1"
 CLUSTER_ARGS = ["--profile", str(REPO / "profiles" / "slurm"),
                 "--slurm-init-seconds-before-status-checks", "2",
                 *([] if ACCOUNTING else ["--slurm-status-command", "squeue", "--slurm-no-account"])]
-#: files whose bytes may differ between two runs of the same config (fitting times)
-NOT_REPRODUCIBLE = ("results/geometry_timing.parquet", "results/geometry_timing/")
-
-Y = """\
-name: y
-expressways: {A: [A1, A2], B: [B1, B2]}
-ramps:
-  rIn:  {from: A1 straight, to: B1 right @0.60}
-  rOut: {from: B2 right @0.40, to: A2 straight}
-"""
-
-
 @pytest.fixture(scope="module")
 def slurm(tmp_path_factory):
     """A one-node Slurm for this module: the environment its clients need."""
