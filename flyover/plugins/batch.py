@@ -30,12 +30,14 @@ import pyarrow.parquet as pq
 
 from flyover.errors import FlyoverError
 from flyover.geometry.model import read_geometry
+from flyover.parallel import map_ordered
 from flyover.plugins.api import PluginError, plugin_config
 from flyover.plugins.registry import installed_plugins, load_plugin
 from flyover.topology.io import file_mode
 
 __all__ = ["PARTITION_KEYS", "PluginRun", "ClassRun", "run_plugins_on_class", "write_partition",
            "partition_path"]
+
 
 log = logging.getLogger(__name__)
 
@@ -128,12 +130,55 @@ def _prune(results_dir: Path, table: str, class_id: str, keep: set[int]) -> None
             shutil.rmtree(part, ignore_errors=True)
 
 
+#: (plugins, their configs, their schemas, results folder) of the batch being run
+_BATCH: tuple | None = None
+
+
+def _evaluate_one(path: str) -> tuple[str, int, dict[str, tuple[list[dict], tuple | None, float]]]:
+    """Every plugin of the running batch on one ``geometry.json``; its partitions written."""
+    loaded, cfgs, schemas, results_dir = _BATCH
+    path = Path(path)
+    class_id, sample = _ids_from_path(path)
+    try:
+        geometry = read_geometry(path)
+        class_id, sample = geometry.class_id, geometry.sample
+        load_error = None
+    except FlyoverError as exc:
+        geometry, load_error = None, exc.one_line()
+    except OSError as exc:
+        geometry, load_error = None, f"cannot read geometry.json: {exc.strerror or exc}"
+    out = {}
+    for p in loaded:
+        t0 = time.process_time()
+        if geometry is not None:
+            try:
+                rows = list(p.evaluate(geometry, cfgs[p.name]))
+                reason = None
+            except Exception as exc:  # noqa: BLE001 - one interchange never stops the batch
+                log.exception("plugin %s failed on %s", p.name, path)
+                rows, reason = [], f"{type(exc).__name__}: {exc}"
+        else:
+            rows, reason = [], load_error
+        if reason is not None:
+            log.error("plugin %s: %s: %s", p.name, path, reason)
+            if hasattr(p, "failure_rows"):
+                rows = list(p.failure_rows(class_id, sample, reason))
+        for r in rows:
+            r.setdefault("class_id", class_id)
+            r.setdefault("sample", sample)
+        seconds = time.process_time() - t0
+        write_partition(rows, schemas[p.name], results_dir, p.table, class_id, sample)
+        out[p.name] = (rows, None if reason is None else (str(path), reason), seconds)
+    return class_id, sample, out
+
+
 def run_plugins_on_class(geometry_paths: Iterable[str | os.PathLike],
                          results_dir: str | os.PathLike, *,
                          config: Mapping[str, Mapping[str, Any]] | None = None,
                          plugins: Sequence[Any] | None = None,
                          class_tables: Mapping[str, str | os.PathLike] | None = None,
-                         prune: bool = True, config_source: str | None = None) -> ClassRun:
+                         prune: bool = True, config_source: str | None = None,
+                         workers: int = 1) -> ClassRun:
     """Evaluate every interchange in ``geometry_paths`` with every plugin.
 
     Parameters
@@ -154,6 +199,8 @@ def run_plugins_on_class(geometry_paths: Iterable[str | os.PathLike],
     prune
         Remove partitions of the classes seen here whose sample is not in the
         batch (left by an earlier run with more samples).
+    workers
+        Forked processes sharing the interchanges (the same rows for any number).
 
     Returns
     -------
@@ -180,40 +227,20 @@ def run_plugins_on_class(geometry_paths: Iterable[str | os.PathLike],
     cpu = {p.name: 0.0 for p in loaded}
     seen: dict[str, set[int]] = {}
     n = 0
-    for path in map(Path, geometry_paths):
-        n += 1
-        class_id, sample = _ids_from_path(path)
-        try:
-            geometry = read_geometry(path)
-            class_id, sample = geometry.class_id, geometry.sample
-            load_error = None
-        except FlyoverError as exc:
-            geometry, load_error = None, exc.one_line()
-        except OSError as exc:
-            geometry, load_error = None, f"cannot read geometry.json: {exc.strerror or exc}"
-        seen.setdefault(class_id, set()).add(sample)
-        for p in loaded:
-            t0 = time.process_time()
-            if geometry is not None:
-                try:
-                    rows = list(p.evaluate(geometry, cfgs[p.name]))
-                    reason = None
-                except Exception as exc:  # noqa: BLE001 - one interchange never stops the batch
-                    log.exception("plugin %s failed on %s", p.name, path)
-                    rows, reason = [], f"{type(exc).__name__}: {exc}"
-            else:
-                rows, reason = [], load_error
-            if reason is not None:
-                failures[p.name].append((str(path), reason))
-                log.error("plugin %s: %s: %s", p.name, path, reason)
-                if hasattr(p, "failure_rows"):
-                    rows = list(p.failure_rows(class_id, sample, reason))
-            for r in rows:
-                r.setdefault("class_id", class_id)
-                r.setdefault("sample", sample)
-            cpu[p.name] += time.process_time() - t0
-            write_partition(rows, schemas[p.name], results_dir, p.table, class_id, sample)
-            all_rows[p.name].extend(rows)
+    global _BATCH  # what forked workers evaluate with (plugin objects need not pickle)
+    _BATCH = (loaded, cfgs, schemas, results_dir)
+    try:
+        for class_id, sample, outcomes in map_ordered(_evaluate_one, list(map(str, geometry_paths)),
+                                                      workers):
+            n += 1
+            seen.setdefault(class_id, set()).add(sample)
+            for name, (rows, failure, seconds) in outcomes.items():
+                if failure is not None:
+                    failures[name].append(failure)
+                cpu[name] += seconds
+                all_rows[name].extend(rows)
+    finally:
+        _BATCH = None
     if prune:
         for p in loaded:
             for class_id, samples in seen.items():

@@ -152,17 +152,31 @@ def run_interchange(net: str | os.PathLike, settings: ThroughputSettings, *, cla
     return rows, series
 
 
+def _run_one(settings: ThroughputSettings, class_id: str, job: tuple[int, str, float]
+             ) -> tuple[list[dict], list[dict]]:
+    sample, net, density = job
+    return run_interchange(net, settings, class_id=class_id, sample=int(sample), densities=[density])
+
+
 def run_class(interchanges: Sequence[tuple[int, str | os.PathLike]], class_id: str,
               settings: ThroughputSettings, table: str | os.PathLike,
-              series: str | os.PathLike) -> list[dict]:
-    """Run ``(sample, net)`` interchanges of one class at every density, in this process.
+              series: str | os.PathLike, workers: int = 1) -> list[dict]:
+    """Run ``(sample, net)`` interchanges of one class at every density.
 
-    Writes the class's throughput rows to ``table`` and its time series to
-    ``series`` (both atomically); returns the rows.
+    Each run is its own libsumo simulation, seeded by class, sample and density; ``workers``
+    forked processes share them (the same rows for any number). Writes the class's
+    throughput rows to ``table`` and its time series to ``series`` (both atomically);
+    returns the rows.
     """
+    from functools import partial  # noqa: PLC0415
+
+    from flyover.parallel import map_ordered  # noqa: PLC0415
+
+    jobs = [(int(sample), str(net), float(d))
+            for sample, net in sorted(interchanges, key=lambda t: int(t[0]))
+            for d in settings.densities]
     rows, srows = [], []
-    for sample, net in sorted(interchanges, key=lambda t: int(t[0])):
-        r, s = run_interchange(net, settings, class_id=class_id, sample=int(sample))
+    for r, s in map_ordered(partial(_run_one, settings, class_id), jobs, workers):
         rows += r
         srows += s
     write_parquet(rows, THROUGHPUT_SCHEMA, table)

@@ -25,7 +25,7 @@ rule plugin_class:
         "logs/plugins/{plugin}/{class_id}.log",
     benchmark:
         "logs/benchmarks/plugins/{plugin}/{class_id}.tsv"
-    threads: 1
+    threads: 2  # forked workers share the class's interchanges
     # measured per Slurm job (truck_fuel): peak 0.73 GB; CPU 3.5 s + up to 0.75 s per
     # interchange
     resources:

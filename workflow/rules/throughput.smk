@@ -22,7 +22,7 @@ rule throughput_class:
         "logs/throughput/{class_id}.log",
     benchmark:
         "logs/benchmarks/throughput/{class_id}.tsv"
-    threads: 1
+    threads: 2  # forked workers share the class's runs (one libsumo each)
     # measured per Slurm job: peak 0.66 GB; CPU up to 7 s per SUMO run (2000 s simulated):
     # half a minute per run (samples x densities) leaves a loaded node 4x the time
     resources:

@@ -15,7 +15,7 @@ samples = sorted(set(pq.read_table(snakemake.input.geometry, columns=["sample"])
 paths = [results / "interchanges" / class_id / str(s) / "geometry.json" for s in samples]
 run = run_plugins_on_class(paths, results, config={plugin: snakemake.params.settings},
                            plugins=[plugin], class_tables={plugin: snakemake.output.table},
-                           config_source="config/config.yaml")
+                           config_source="config/config.yaml", workers=snakemake.threads)
 log = logging.getLogger("plugins")
 for r in run.runs:
     log.info("%s %s on %s: %d interchanges, %d rows, %d failed, %.1f s CPU", r.plugin,

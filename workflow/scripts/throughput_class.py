@@ -17,7 +17,8 @@ listed = sorted(set(pq.read_table(snakemake.input.interchanges, columns=["sample
 chosen = select_samples(listed, settings.samples_per_class, settings.seed, class_id)
 logging.info("%s: %d of %d interchanges: %s", class_id, len(chosen), len(listed), chosen)
 nets = [(s, Path(f"results/interchanges/{class_id}/{s}/interchange.net.xml")) for s in chosen]
-rows = run_class(nets, class_id, settings, snakemake.output.table, snakemake.output.series)
+rows = run_class(nets, class_id, settings, snakemake.output.table, snakemake.output.series,
+                 workers=snakemake.threads)
 failed = [r for r in rows if not r["ok"]]
 logging.info("%s: %d runs, %d failed, %d flagged", class_id, len(rows), len(failed),
              sum(r["flagged"] for r in rows))
