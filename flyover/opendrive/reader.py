@@ -25,6 +25,8 @@ Example
 
 from __future__ import annotations
 
+from bisect import bisect_right
+
 import math
 import os
 from dataclasses import dataclass, field
@@ -59,6 +61,10 @@ def _piecewise(records: list[Cubic], s: np.ndarray | float) -> np.ndarray:
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if not records:
         return np.zeros_like(s)
+    if s.size == 1:  # one station (lane ends, links): no vector machinery
+        v = float(s[0])
+        i = max(0, min(bisect_right([r.s for r in records], v + 1e-9) - 1, len(records) - 1))
+        return np.array([records[i](v)], dtype=float)
     starts = np.array([r.s for r in records])
     idx = np.clip(np.searchsorted(starts, s + 1e-9, side="right") - 1, 0, len(records) - 1)
     out = np.empty_like(s)
