@@ -51,8 +51,8 @@ SELECT g.class_id, count(DISTINCT g.sample) AS interchanges, count(*) AS ramps,
        count(DISTINCT g.sample) FILTER (WHERE starts_with(g.infeasible, 'not built')) AS not_built,
        min(g.length_m) AS min_length_m, median(g.length_m) AS median_length_m,
        max(g.length_m) AS max_length_m, sum(g.length_m) / 1000 AS ramp_km,
-       median(t.seconds) AS median_fit_s
-FROM geometry g LEFT JOIN geometry_timing t USING (class_id, sample, ramp)
+       median(g.evaluations) AS median_evaluations
+FROM geometry g
 GROUP BY g.class_id ORDER BY g.class_id
 """
 
@@ -189,14 +189,10 @@ class _Writer:
 
 
 def _geometry_summary(results: Results):
-    """Per class: ramps within targets, first try, lengths, and fitting time when the
-    timing table is there (it is kept apart from ``geometry``; without it, no time)."""
-    tbl = results.sql(_GEOMETRY_SUMMARY)
-    if tbl.absent and tbl.table == "geometry_timing":
-        tbl = results.sql(_GEOMETRY_SUMMARY
-                          .replace("median(t.seconds)", "NULL::DOUBLE")
-                          .replace("LEFT JOIN geometry_timing t USING (class_id, sample, ramp)", ""))
-    return tbl
+    """Per class: ramps within targets, first try, lengths, DE effort (evaluations, not
+    seconds: the report is the same bytes for the same results; times are in
+    ``geometry_timing``)."""
+    return results.sql(_GEOMETRY_SUMMARY)
 
 
 def _class_context(results: Results) -> dict[str, Any]:
