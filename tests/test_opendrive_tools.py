@@ -164,3 +164,75 @@ def test_cli_export_writes_xodr_and_plan(built, tmp_path):
                  "--plan", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (tmp_path / "x.xodr").read_bytes() == (built["loop"] / "interchange.xodr").read_bytes()
+
+
+def _identity_violations(data: bytes) -> dict[str, bytes]:
+    """The file and copies that break the 1.8 schema's keys in different ways."""
+    root = etree.fromstring(data)
+    roads, junctions = root.findall("road"), root.findall("junction")
+    out = {"valid": data}
+
+    def variant(name, edit):
+        copy = etree.fromstring(data)
+        edit(copy)
+        out[name] = etree.tostring(copy)
+
+    variant("duplicate road id", lambda r: r.findall("road")[1].set("id", roads[0].get("id")))
+    variant("road without id", lambda r: r.findall("road")[2].attrib.pop("id"))
+    variant("road id in a key twice, once first", lambda r: r.insert(1, etree.Element(
+        "road", id=roads[-1].get("id"), length="1")))
+    variant("length not a number", lambda r: r.findall("road")[0].set("length", "abc"))
+    variant("unknown element inside a road", lambda r: etree.SubElement(r.findall("road")[1], "bogus"))
+    if len(junctions) > 1:
+        variant("duplicate junction id", lambda r: r.findall("junction")[1].set("id", junctions[0].get("id")))
+    return out
+
+
+def test_shared_document_annotations_give_the_same_xsd_11_errors(built, tmp_path):
+    """The checker process skips repeated whole-document type annotations (``_qc_driver``):
+    every error, identity constraints included, is what plain ``xmlschema`` reports."""
+    import re
+
+    xsd = qc.schema_dir() / "1.8.0" / "OpenDRIVE_Core.xsd"
+    jobs = []
+    for kind in ("t", "loop"):
+        for name, data in _identity_violations((built[kind] / "interchange.xodr").read_bytes()).items():
+            path = tmp_path / f"{kind}_{len(jobs)}.xodr"
+            path.write_bytes(data)
+            jobs.append((xsd, path))
+    runs = [qc.run_qc_batch(xsd11=jobs, share_annotations=share).xsd11 for share in (True, False)]
+    address = re.compile(r" at 0x[0-9a-f]+")
+    shared, plain = ([[address.sub("", e) for e in r.errors] for r in run] for run in runs)
+    assert [r.error for run in runs for r in run] == [""] * 2 * len(jobs)
+    assert shared == plain
+    assert shared[0] == [] and all(errors for errors in shared[1:len(shared) // 2])
+    assert any("duplicat" in e.lower() for errors in shared for e in errors), shared
+
+
+_TYPED_KEY_XSD = """<xs:schema xmlns:xs="http://www.w3.org/2001/XMLSchema">
+  <xs:element name="r">
+    <xs:complexType><xs:sequence>
+      <xs:element name="k" maxOccurs="unbounded"><xs:complexType>
+        <xs:attribute name="id" type="xs:int" use="required"/>
+      </xs:complexType></xs:element>
+    </xs:sequence></xs:complexType>
+    <xs:key name="k_id"><xs:selector xpath="k"/><xs:field xpath="@id"/></xs:key>
+  </xs:element>
+</xs:schema>"""
+
+
+def test_shared_document_annotations_keep_typed_keys_typed_in_every_document(tmp_path):
+    """``1`` and ``01`` are one ``xs:int`` key value only when the document carries its schema
+    types: a skipped annotation that should have run (another document, say) misses them."""
+    xsd = tmp_path / "typed_key.xsd"
+    xsd.write_text(_TYPED_KEY_XSD)
+    docs = {"distinct": '"1" "2" "3"', "1 and 01": '"1" "2" "01"', "+2 and 2": '"2" "+2" "3"'}
+    jobs = []
+    for i, ids in enumerate(docs.values()):
+        path = tmp_path / f"doc{i}.xml"
+        path.write_text("<r>" + "".join(f"<k id={v}/>" for v in ids.split()) + "</r>")
+        jobs.append((xsd, path))
+    shared, plain = ([r.errors for r in qc.run_qc_batch(xsd11=jobs, share_annotations=s).xsd11]
+                     for s in (True, False))
+    assert shared == plain
+    assert shared[0] == () and all(len(e) == 1 and "duplicate" in e[0].lower() for e in shared[1:]), shared

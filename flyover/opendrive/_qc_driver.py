@@ -31,6 +31,21 @@ memoizing stand-in for ``xmlschema.XMLSchema11`` (same schema, same
 validation, built once). ``xsd11`` jobs validate a file against an XSD 1.1
 schema the same way (flyover's own ``xsd`` check of 1.8 files).
 
+XSD 1.1 identity constraints (OpenDRIVE 1.8 declares 31 ``xs:key``/``keyref``
+on ``OpenDRIVE``) cost most of a file's validation: for every element a key
+selects, ``xmlschema`` evaluates the field's XPath, and ``elementpath``
+re-annotates the *whole document* with schema types first (its
+``apply_schema`` skips only when the node already carries the same proxy
+object, and each field brings a proxy of its own). A whole-document
+annotation is a function of the document and the schema alone (proxies
+without a base element, on a fully valid schema), so
+:func:`_share_document_annotations` skips one that repeats the annotation
+already in place for the same document and schema; anything else that
+touches the annotations (another schema, a base element, assertions,
+``clear_types``) runs as before and forgets it. Same errors, about a third of
+the CPU (``tests/test_opendrive_qc.py`` validates broken files both ways).
+``"share_annotations": false`` in ``JOBS.json`` turns it off.
+
 Prints one JSON object on stdout: per config ``{"seconds", "error"}``, per
 xsd11 job ``{"seconds", "errors", "error"}`` (``errors``: ``"line N:
 reason"``), and ``startup_seconds``. A job that raises is reported with its
@@ -87,6 +102,44 @@ def _only_excluded_by(main, version):
     return execute_checker
 
 
+def _share_document_annotations():
+    """Skip ``elementpath``'s whole-document type annotation when it would repeat the one in place."""
+    from elementpath import xpath_nodes as nodes
+
+    state = {"root": None, "schema": None}  # the annotation in place: document root and XSD schema
+
+    def forget():
+        state["root"] = state["schema"] = None
+
+    apply = nodes.EtreeElementNode.apply_schema
+
+    def apply_schema(self, proxy):
+        whole = (proxy.base_element is None and proxy.is_fully_valid()
+                 and not proxy.is_assertion_based())
+        if whole:
+            root = self
+            while isinstance(root.parent, nodes.EtreeElementNode):
+                root = root.parent
+            if state["root"] is root and state["schema"] is proxy.schema:
+                self.schema = proxy  # what the full pass leaves on the node it started from
+                return
+        forget()
+        apply(self, proxy)
+        if whole:
+            state["root"], state["schema"] = root, proxy.schema
+
+    def forgetting(fn):
+        def wrapper(*args, **kwargs):
+            forget()
+            return fn(*args, **kwargs)
+        return wrapper
+
+    nodes.EtreeElementNode.apply_schema = apply_schema
+    for cls, name in ((nodes.EtreeElementNode, "clear_types"), (nodes.DocumentNode, "apply_schema"),
+                      (nodes.DocumentNode, "clear_types"), (nodes.AttributeNode, "apply_schema")):
+        setattr(cls, name, forgetting(getattr(cls, name)))
+
+
 def _run_config(path, bundle, excluded_by=None):
     from qc_baselib import Configuration, Result
 
@@ -136,6 +189,8 @@ def main(argv):
     from qc_opendrive.checks.schema import valid_schema
 
     logging.getLogger().setLevel(logging.WARNING)  # the bundle logs every check at INFO
+    if jobs.get("share_annotations", True):
+        _share_document_annotations()
     memo = _MemoXmlschema(xmlschema)
     valid_schema.xmlschema = memo
     out = {"startup_seconds": round(time.perf_counter() - t0, 4), "configs": [], "xsd11": []}

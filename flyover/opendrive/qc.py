@@ -199,7 +199,8 @@ class QCBatch:
 def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
                  xsd11: Sequence[tuple[str | os.PathLike, str | os.PathLike]] = (),
                  python: Path | None = None, timeout_s: float = 300,
-                 excluded_by: Sequence[str | None] | None = None) -> QCBatch:
+                 excluded_by: Sequence[str | None] | None = None,
+                 share_annotations: bool = True) -> QCBatch:
     """Run the checker bundle on every file of ``xodrs`` and the ``(schema, file)`` XSD 1.1
     validations of ``xsd11``, all in one process of the checker's environment.
 
@@ -207,6 +208,9 @@ def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
     only the version-bound checkers that do not apply to that version (and the basic
     ones): for a rendition that differs from a file checked in that version only in the
     declared version.
+
+    ``share_annotations=False`` validates XSD 1.1 identity constraints without the
+    driver's shared document annotations (see ``_qc_driver``), as ``xmlschema`` alone does.
 
     A file the bundle cannot process gets a :class:`CheckerRun` with ``error``
     set; the others still run. ``timeout_s`` is per file. Raises
@@ -224,7 +228,8 @@ def run_qc_batch(xodrs: Sequence[str | os.PathLike] = (), *,
         jobs = Path(tmp) / "jobs.json"
         jobs.write_text(json.dumps({"configs": cfgs, "excluded_by": list(excluded_by or [None] * len(cfgs)),
                                     "xsd11": [[str(Path(s).resolve()), str(Path(x).resolve())]
-                                              for s, x in xsd11]}), encoding="utf-8")
+                                              for s, x in xsd11],
+                                    "share_annotations": share_annotations}), encoding="utf-8")
         t0 = time.perf_counter()
         try:
             proc = subprocess.run([str(py), str(_DRIVER), str(jobs)], cwd=tmp, capture_output=True,
