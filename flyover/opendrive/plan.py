@@ -17,8 +17,10 @@ from flyover.opendrive.reader import XodrNetwork, XodrRoad, _piecewise
 __all__ = ["lane_polygons", "draw_plan"]
 
 
-def lane_polygons(road: XodrRoad, step_m: float = 4.0) -> list[tuple[str, np.ndarray, float]]:
-    """(lane type, polygon (n×2), mean height) chunks of every lane of ``road``."""
+def lane_polygons(road: XodrRoad, step_m: float = 4.0, chunk: int = 10
+                  ) -> list[tuple[str, np.ndarray, float]]:
+    """(lane type, polygon (n×2), mean height) chunks of every lane of ``road``, ``chunk``
+    steps long (short enough for a climbing ramp to be drawn over what it crosses)."""
     out = []
     bounds = [sec.s for sec in road.sections] + [road.length]
     for sec, s1 in zip(road.sections, bounds[1:]):
@@ -36,8 +38,8 @@ def lane_polygons(road: XodrRoad, step_m: float = 4.0) -> list[tuple[str, np.nda
                 w = lane.width(s - sec.s)
                 t_out = t + side * w
                 if np.any(w > 1e-3):
-                    for a in range(0, n - 1, 3):
-                        b = min(a + 4, n)
+                    for a in range(0, n - 1, chunk):
+                        b = min(a + chunk + 1, n)
                         poly = np.concatenate([
                             np.stack([x[a:b] + nx[a:b] * t[a:b], y[a:b] + ny[a:b] * t[a:b]], 1),
                             np.stack([x[a:b] + nx[a:b] * t_out[a:b], y[a:b] + ny[a:b] * t_out[a:b]], 1)[::-1]])
@@ -99,7 +101,7 @@ def draw_plan(net: XodrNetwork, path: str | os.PathLike, title: str | None = Non
     ax.set_title(title or (net.header.get("name") or "interchange"), fontsize=10)
     sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=ax, shrink=0.7, label="height z (m)")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.1, right=0.98, bottom=0.07, top=0.95)  # fixed: tight_layout drew the figure twice
     import io  # noqa: PLC0415
 
     buf = io.BytesIO()
