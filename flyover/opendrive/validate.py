@@ -131,13 +131,17 @@ def other_rendition(data: bytes, version: tuple[int, int], geometry: Interchange
                                         "checked (no geometry.json to write one from)")
     opts = options or ExportOptions()
     try:
-        if xodr_bytes(geometry, replace(opts, opendrive_minor=version[1])) != data:
-            return OtherVersion(None, None, f"no {name} rendition: the file is not what flyover "
-                                            "writes from its geometry.json (edited, or other "
-                                            "export options)")
-        return OtherVersion(other, xodr_bytes(geometry, replace(opts, opendrive_minor=other[1])))
+        rendition = xodr_bytes(geometry, replace(opts, opendrive_minor=other[1]))
     except FlyoverError as exc:
         return OtherVersion(None, None, f"no {name} rendition: {exc.one_line()}")
+    # the writer's two versions differ in the header's revMinor alone (one writer pass, not
+    # two; were they to differ anywhere else, no file would match and none would be rendered)
+    mark = f'revMinor="{other[1]}"'.encode()
+    if mark not in rendition or rendition.replace(mark, f'revMinor="{version[1]}"'.encode(), 1) != data:
+        return OtherVersion(None, None, f"no {name} rendition: the file is not what flyover "
+                                        "writes from its geometry.json (edited, or other "
+                                        "export options)")
+    return OtherVersion(other, rendition)
 
 
 def movements(g: InterchangeGeometry) -> list[tuple[str, str]]:
