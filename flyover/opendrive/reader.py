@@ -152,6 +152,10 @@ class LaneSection:
     lanes: dict[int, Lane]
 
 
+def _offset(x: float, y: float, z: float, heading: float, t: float) -> tuple[float, float, float]:
+    return x - math.sin(heading) * t, y + math.cos(heading) * t, z
+
+
 @dataclass
 class XodrRoad:
     """A road: plan view, elevation, lane offset, lane sections and links."""
@@ -206,23 +210,20 @@ class XodrRoad:
     def lane_point(self, lane_id: int, s: float, at_end: bool = False
                    ) -> tuple[float, float, float, float] | None:
         """(x, y, z, heading) of a lane's centre line at ``s``."""
-        def at(si: float):
-            bt = self.lane_t(lane_id, si, at_end)
-            if bt is None:
-                return None
-            t = 0.5 * (bt[0] + bt[1])
-            x, y, z, h = (float(a[0]) for a in self.reference(si))
-            return x - math.sin(h) * t, y + math.cos(h) * t, z
-        p = at(s)
-        if p is None:
-            return None
         # tangent by a one-sided three-point difference (exact for quadratics):
         # a two-point difference reads the mean slope over the step and errs by
         # ~0.5 deg where inner lanes taper with cubic widths up to the link
         h = min(0.02, self.length / 8)
         step = -h if at_end or s >= self.length - 1e-9 else h
-        a = at(min(max(s + step, 0.0), self.length))
-        b = at(min(max(s + 2 * step, 0.0), self.length))
+        stations = [s] + [min(max(s + k * step, 0.0), self.length) for k in (1, 2)]
+        borders = [self.lane_t(lane_id, si, at_end) for si in stations]
+        if borders[0] is None:
+            return None
+        x, y, z, hd = self.reference(np.array(stations))  # the three stations in one evaluation
+        pts = [None if bt is None else _offset(float(x[i]), float(y[i]), float(z[i]), float(hd[i]),
+                                               0.5 * (bt[0] + bt[1]))
+               for i, bt in enumerate(borders)]
+        p, a, b = pts
         if a is None or b is None:
             return (*p, float("nan"))
         dx = (-3 * p[0] + 4 * a[0] - b[0]) * math.copysign(1, step)
