@@ -42,7 +42,7 @@ without a base element, on a fully valid schema), so
 :func:`_share_document_annotations` skips one that repeats the annotation
 already in place for the same document and schema; anything else that
 touches the annotations (another schema, a base element, assertions,
-``clear_types``) runs as before and forgets it. Same errors, about a third of
+``clear_types``) runs as before and forgets it. Same errors, less than half
 the CPU (``tests/test_opendrive_qc.py`` validates broken files both ways).
 ``"share_annotations": false`` in ``JOBS.json`` turns it off.
 
