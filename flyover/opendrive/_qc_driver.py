@@ -43,7 +43,7 @@ without a base element, on a fully valid schema), so
 already in place for the same document and schema; anything else that
 touches the annotations (another schema, a base element, assertions,
 ``clear_types``) runs as before and forgets it. Same errors, less than half
-the CPU (``tests/test_opendrive_qc.py`` validates broken files both ways).
+the CPU (``tests/test_opendrive_tools.py`` validates broken files both ways).
 ``"share_annotations": false`` in ``JOBS.json`` turns it off.
 
 Prints one JSON object on stdout: per config ``{"seconds", "error"}``, per
