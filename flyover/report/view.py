@@ -90,8 +90,11 @@ def viridis_hex(t: float) -> str:
     return "#" + "".join(f"{int(round(c)):02x}" for c in rgb)
 
 
-def _points(x: np.ndarray, y: np.ndarray) -> str:
-    return " ".join(f"{a:.1f},{-b:.1f}" for a, b in zip(x, y))
+def _points(x, y) -> str:
+    """SVG points ``x,-y`` to 0.1 m (one C-level format of the whole list)."""
+    xy = np.empty(2 * len(x))
+    xy[0::2], xy[1::2] = x, -np.asarray(y, dtype=float)
+    return " ".join(["%.1f,%.1f"] * len(x)) % tuple(xy.tolist())
 
 
 def _ramp_centre(ramp, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
