@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flyover.errors import TopologyError
+from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
 from flyover.osm.reader import OsmNetwork, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
@@ -75,6 +76,13 @@ class OsmOptions:
         the carriageway (catalog ``trumpet``), not into the carriageway.
     connector_max_length_m
         A ``motorway`` stretch without ``ref`` between links up to this long is a link.
+    driving_side
+        ``"auto"`` (a ``driving_side`` tag on the ways, else the country the
+        extract lies in), ``"right"`` or ``"left"``. Left-hand traffic mirrors
+        the labels: a left-hand interchange reads as its right-hand mirror image.
+    bbox
+        ``(min_lon, min_lat, max_lon, max_lat)``: only network ways with a node
+        inside are read (the city's entry under ``osm.city_bbox`` in the config).
     """
 
     trunk_as_motorway: bool = False
@@ -83,10 +91,21 @@ class OsmOptions:
     cluster_distance_m: float = 600.0
     stem_length_m: float = 250.0
     connector_max_length_m: float = 400.0
+    driving_side: str = "auto"
+    bbox: tuple[float, float, float, float] | None = None
 
     @classmethod
-    def from_config(cls, config: dict) -> "OsmOptions":
+    def from_config(cls, config: dict, city: str | None = None) -> "OsmOptions":
+        """Options from ``config["osm"]``; ``city`` picks its bbox from ``osm.city_bbox``
+        (a section already cut to one city may carry it as ``bbox``)."""
         sec = dict(config.get("osm") or {})
+        box = (sec.get("city_bbox") or {}).get(city) if city is not None else sec.get("bbox")
+        sec["bbox"] = tuple(float(v) for v in box) if box is not None else None
+        if sec["bbox"] is not None and (len(sec["bbox"]) != 4 or not (
+                sec["bbox"][0] < sec["bbox"][2] and sec["bbox"][1] < sec["bbox"][3])):
+            from flyover.errors import ConfigError  # noqa: PLC0415
+            raise ConfigError("bbox must be [min_lon, min_lat, max_lon, max_lat] with min < max",
+                              element=f"osm.city_bbox.{city}" if city else "osm.bbox")
         return cls(**{k: sec[k] for k in cls.__dataclass_fields__ if k in sec})
 
     @property
@@ -136,6 +155,13 @@ class _Network:
         ids = list(net.coords)
         xy = self.proj.xy([net.coords[i][0] for i in ids], [net.coords[i][1] for i in ids]) \
             if ids else np.zeros((0, 2))
+        self.side = self._driving_side()
+        self.mirror = 1.0
+        if self.side == "left":  # left-hand traffic: read in a mirror, labels come out mirrored
+            self.mirror = -1.0
+            xy = xy * np.array([-1.0, 1.0])
+            self.quirk("left-hand traffic: the interchange is read mirrored (labels as its "
+                       "right-hand mirror image)")
         self.xy: dict[int, np.ndarray] = {i: xy[k] for k, i in enumerate(ids)}
         self.seg: dict[tuple[int, int], int] = {}   # (a, b) -> way id
         self.cls: dict[int, str] = {}                # way id -> road|link
@@ -143,6 +169,18 @@ class _Network:
         self.succ: dict[int, list[int]] = defaultdict(list)
         self.pred: dict[int, list[int]] = defaultdict(list)
         self._next_virtual = -1
+
+    def _driving_side(self) -> str:
+        if self.opt.driving_side in ("left", "right"):
+            return self.opt.driving_side
+        tagged = Counter(w.tag("driving_side") for w in self.net.ways.values() if w.tag("driving_side"))
+        if tagged:
+            return tagged.most_common(1)[0][0]
+        return driving_side_at(self.proj.lat0, self.proj.lon0)
+
+    def unmirrored(self, xy) -> np.ndarray:
+        """Map coordinates as they are on the ground (undo the left-hand-traffic mirror)."""
+        return np.asarray(xy, float).reshape(-1, 2) * np.array([self.mirror, 1.0])
 
     def quirk(self, msg: str, level: int = logging.INFO) -> None:
         self.quirks.append(msg)
@@ -775,7 +813,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             k += 1
     road_id: dict[int, str] = {}
     for g in road_gids:
-        base = exp_of[g] + bearing_letter(heading[g])
+        base = exp_of[g] + bearing_letter(heading[g] * np.array([nw.mirror, 1.0]))
         rid, k = base, 2
         while rid in road_id.values():
             rid, k = f"{base}{k}", k + 1
@@ -841,8 +879,10 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         lines[rid] = st.xy.tolist()
     osm = {
         "origin": (nw.proj.lat0, nw.proj.lon0),
-        "lines": lines,
-        "junctions": [(nw.xy[n].tolist(), nid(src), nid(dst), label.value) for src, dst, label, n in edges],
+        "lines": {k: nw.unmirrored(v).tolist() for k, v in lines.items()},
+        "junctions": [(nw.unmirrored(nw.xy[n])[0].tolist(), nid(src), nid(dst), label.value)
+                      for src, dst, label, n in edges],
+        "driving_side": nw.side,
         "quirks": list(nw.quirks),
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }
