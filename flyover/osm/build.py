@@ -690,17 +690,128 @@ def interchange_name(corridors: list[str], first_node: int) -> tuple[str, dict]:
     return name, {"refs": parts, "osm_node": first_node}
 
 
-def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
+def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> list[Topology]:
     """Every motorway-to-motorway interchange of ``net`` as a topology.
 
     An interchange that breaks a model rule is logged and left out; the
     others are still returned.
+
+    The network is read place by place (:func:`split_network`); ``workers`` > 1
+    reads places in that many forked processes (same result, in the same order).
 
     Raises
     ------
     TopologyError
         Every interchange found breaks a model rule (the first one's reason).
     """
+    out, failed = [], []
+    parts = split_network(net, options)
+    if workers > 1 and len(parts) > 1:
+        import multiprocessing  # noqa: PLC0415
+
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            results = pool.starmap(_build_part_safe, [(p, options) for p in parts],
+                                   chunksize=max(1, len(parts) // (8 * workers)))
+    else:
+        results = [_build_part_safe(p, options) for p in parts]
+    for found, exc in results:
+        out += found
+        if exc is not None:
+            failed.append(exc)
+    if failed and not out:  # nothing usable: the file is rejected with the first reason
+        raise failed[0]
+    names = Counter(t.name for t in out)
+    for name in sorted(n for n, k in names.items() if k > 1):
+        log.warning("%s: duplicate interchange name %s", net.source, name)
+    return sorted(out, key=lambda t: t.name)
+
+
+#: parts of a network closer than this (m) are read together (snapping, opposite carriageways)
+_PART_GAP_M = 250.0
+
+
+def split_network(net: OsmNetwork, options: OsmOptions) -> list[OsmNetwork]:
+    """The network cut into places read independently: ways connected through shared
+    nodes, joined when their bounding boxes come within ``_PART_GAP_M`` (plus the snap
+    tolerance). A metro extract is read place by place, so the work grows with its size."""
+    ids = sorted(net.ways)
+    if len(ids) < 2:
+        return [net]
+    parent = list(range(len(ids)))
+
+    def find(k):
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    first_way: dict[int, int] = {}
+    for k, wid in enumerate(ids):
+        for n in net.ways[wid].nodes:
+            j = first_way.setdefault(n, k)
+            if j != k:
+                ra, rb = find(j), find(k)
+                if ra != rb:
+                    parent[max(ra, rb)] = min(ra, rb)
+    groups: dict[int, list[int]] = defaultdict(list)
+    for k in range(len(ids)):
+        groups[find(k)].append(k)
+    roots = sorted(groups)
+    boxes = np.full((len(roots), 4), np.nan)
+    for r, root in enumerate(roots):
+        pts = np.array([net.coords[n] for k in groups[root] for n in net.ways[ids[k]].nodes
+                        if n in net.coords]).reshape(-1, 2)
+        if len(pts):
+            boxes[r] = [pts[:, 0].min(), pts[:, 1].min(), pts[:, 0].max(), pts[:, 1].max()]
+    gap_deg = (_PART_GAP_M + options.snap_tolerance_m) / 111_000.0
+    lat = np.nan_to_num(np.abs(boxes[:, [0, 2]]).max(axis=1), nan=0.0)
+    gap_lon = gap_deg / np.maximum(np.cos(np.radians(np.minimum(lat, 89.0))), 1e-3)
+    merge = list(range(len(roots)))
+
+    def find_part(k):
+        while merge[k] != k:
+            merge[k] = merge[merge[k]]
+            k = merge[k]
+        return k
+
+    order = np.argsort(np.nan_to_num(boxes[:, 0], nan=1e9))
+    active: list[int] = []  # sweep along latitude: only boxes overlapping in latitude are compared
+    for r in order:
+        if np.isnan(boxes[r, 0]):
+            continue
+        active = [a for a in active if boxes[a, 2] + gap_deg >= boxes[r, 0]]
+        for a in active:
+            g = max(gap_lon[a], gap_lon[r])
+            if boxes[a, 1] - g <= boxes[r, 3] and boxes[r, 1] - g <= boxes[a, 3]:
+                ra, rb = find_part(a), find_part(r)
+                if ra != rb:
+                    merge[max(ra, rb)] = min(ra, rb)
+        active.append(int(r))
+    parts: dict[int, list[int]] = defaultdict(list)
+    for r, root in enumerate(roots):
+        parts[find_part(r)].extend(groups[root])
+    if len(parts) == 1:
+        return [net]
+    out = []
+    for key in sorted(parts):
+        way_ids = sorted(ids[k] for k in parts[key])
+        sub = OsmNetwork(source=net.source, ways={w: net.ways[w] for w in way_ids})
+        nodes = {n for w in way_ids for n in net.ways[w].nodes}
+        sub.coords = {n: net.coords[n] for n in sorted(nodes) if n in net.coords}
+        sub.elevation = {n: net.elevation[n] for n in sub.coords if n in net.elevation}
+        sub.ordinary = {n: net.ordinary[n] for n in sub.coords if n in net.ordinary}
+        out.append(sub)
+    return out
+
+
+def _build_part_safe(net: OsmNetwork, options: OsmOptions) -> tuple[list[Topology], TopologyError | None]:
+    try:
+        return _build_part(net, options), None
+    except TopologyError as exc:
+        return [], exc
+
+
+def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     nw = _Network(net, options)
     nw.add_ways()
     nw.snap_dangling_links()
@@ -722,12 +833,18 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
         k = e[0] if e[0][0] not in _ROAD_KEYS else e[1]
         comp_edges[comp_of[k]].append(e)
 
+    corridor_sets = [{b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
+                     for ci in range(len(comps))]
+    point_sets: dict[int, np.ndarray] = {}
+
     def corridors(ci):
-        return {b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
+        return corridor_sets[ci]
 
     def points(ci):
-        return np.array([nw.xy[e[3]] for e in comp_edges[ci]] +
-                        [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
+        if ci not in point_sets:
+            point_sets[ci] = np.array([nw.xy[e[3]] for e in comp_edges[ci]] +
+                                      [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
+        return point_sets[ci]
 
     multi = [ci for ci in range(len(comps)) if len(corridors(ci)) >= 2]
     attached: dict[int, list[int]] = defaultdict(list)
@@ -766,13 +883,9 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
             exc.located(nw.src)
             failed.append(exc)
             log.warning("interchange rejected: %s", exc.one_line())
-    if failed and not out:  # nothing usable: the file is rejected with the first reason
+    if failed and not out:
         raise failed[0]
-    names = Counter(t.name for t in out)
-    for t in out:
-        if names[t.name] > 1:
-            log.warning("%s: duplicate interchange name %s", nw.src, t.name)
-    return sorted(out, key=lambda t: t.name)
+    return out
 
 
 def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:

@@ -2,16 +2,17 @@
 
 One reader for every format, through pyosmium (the Python binding of
 libosmium, ``osmium`` on PyPI), which decodes XML, compressed XML and PBF in
-C++. The file is read twice, with filters run inside libosmium so that only
-what is needed reaches Python:
+C++. The file is read three times, with filters run inside libosmium so that
+only what is needed reaches Python:
 
 1. ways tagged ``highway=motorway|motorway_link`` (and ``trunk|trunk_link``
-   when asked), with their node coordinates from a node-location index;
-2. the ordinary ``highway=*`` ways touching a node of that network (exits to
-   ordinary roads) and the ``ele`` of its nodes.
+   when asked);
+2. the locations (and ``ele``) of their nodes, picked by a node-id index
+   (``osmium.IdTracker``) in libosmium: the other nodes never reach Python;
+3. the ordinary ``highway=*`` ways touching a node of that network (exits to
+   ordinary roads), picked by the same index.
 
-Memory grows with the node-location index (a few bytes per node of the file)
-and the motorway network, not with the ordinary roads.
+Memory grows with the motorway network, not with the file.
 """
 
 from __future__ import annotations
@@ -134,45 +135,47 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
     if not is_osm_file(src):
         raise InputFormatError(f"not an OSM extract name (expected one of {', '.join(OSM_SUFFIXES)})",
                                source=src)
-    missing: list[tuple[int, int]] = []  # (way, node)
     ways: dict[int, OsmWay] = {}
     coords: dict[int, tuple[float, float]] = {}
     try:
+        # 1. the network's ways (tag filter in libosmium)
         flt = osmium.filter.TagFilter(*(("highway", h) for h in sorted(highways)))
-        proc = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY).with_locations() \
-            .with_filter(osmium.filter.EntityFilter(osmium.osm.WAY)).with_filter(flt)
-        for w in proc:
-            nodes, pts = [], []
-            for nd in w.nodes:
-                loc = nd.location
-                nodes.append(nd.ref)
-                if loc.valid():
-                    pts.append((nd.ref, loc.lat, loc.lon))
-                else:
-                    missing.append((w.id, nd.ref))
+        for w in osmium.FileProcessor(src, osmium.osm.WAY).with_filter(flt):
+            nodes = tuple(nd.ref for nd in w.nodes)
             if len(nodes) < 2:
                 log.warning("%s: way %d: fewer than two nodes, ignored", src, w.id)
                 continue
-            if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
-                                             for _, lat, lon in pts):
-                continue
             tags = {t.k: t.v for t in w.tags}
-            ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
-            for ref, lat, lon in pts:
-                coords[ref] = (lat, lon)
-        needed = {n for w in ways.values() for n in w.nodes}
+            ways[w.id] = OsmWay(w.id, nodes, tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
+        tracker = osmium.IdTracker()
+        for w in ways.values():
+            for n in w.nodes:
+                tracker.add_node(n)
+        # 2. the locations (and ele) of their nodes only: an id index in libosmium
+        bad: list[int] = []
         if ways:
-            second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
-                .with_filter(osmium.filter.KeyFilter("highway", "ele"))
-            for o in second:
-                if o.is_node():
-                    if o.id in needed and "ele" in o.tags:
-                        ele = _ele(o.tags["ele"])
-                        if ele is None:
-                            log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
-                        else:
-                            net.elevation[o.id] = ele
+            for o in osmium.FileProcessor(src, osmium.osm.NODE).with_filter(tracker.id_filter()):
+                loc = o.location
+                if not loc.valid():
+                    bad.append(o.id)
                     continue
+                coords[o.id] = (loc.lat, loc.lon)
+                if "ele" in o.tags:
+                    ele = _ele(o.tags["ele"])
+                    if ele is None:
+                        log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
+                    else:
+                        net.elevation[o.id] = ele
+        if bbox is not None:
+            ways = {wid: w for wid, w in ways.items()
+                    if any(n in coords and bbox[0] <= coords[n][1] <= bbox[2] and bbox[1] <= coords[n][0] <= bbox[3]
+                           for n in w.nodes)}
+        needed = {n for w in ways.values() for n in w.nodes}
+        # 3. ordinary roads touching the network (exits): ways referring to a tracked node
+        if ways:
+            second = osmium.FileProcessor(src, osmium.osm.WAY) \
+                .with_filter(osmium.filter.KeyFilter("highway")).with_filter(tracker.contains_filter())
+            for o in second:
                 hw = o.tags.get("highway")
                 if hw is None or hw in highways:
                     continue
@@ -185,10 +188,14 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
     except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
         # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
         raise _format_error(src, exc) from None
+    coords = {n: coords[n] for n in sorted(needed) if n in coords}
+    missing = sorted((wid, n) for wid, w in ways.items() for n in w.nodes if n not in coords)
     net.ways, net.coords = ways, coords
     if missing:
         w0, n0 = missing[0]
         log.warning("%s: way %d refers to node %d, missing from the file or off the globe "
                     "(%d such reference(s)): the way is cut there", src, w0, n0, len(missing))
+    elif bad:
+        log.warning("%s: node %d off the globe", src, bad[0])
     log.info("%s: %d network ways, %d nodes", Path(src).name, len(net.ways), len(net.coords))
     return net
