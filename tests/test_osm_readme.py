@@ -40,23 +40,13 @@ README_ROWS = {
     "20_au_sydney_a4_bradfield_cahill": [(3, 1, None)],
     "21_us_or_portland_i5_i84": [(3, 0, None)],
     "22_us_or_portland_i405_us26": [(3, 0, None)],
-    "23_us_or_portland_i5_i405_marquam": [(3, 0, None)],
-    "24_us_ma_boston_i93_us1": [(3, 2, None)],
-    "25_us_ma_boston_i90_ma1a": [(3, 0, None)],
     "26_us_dc_i66_us50_e_st_expwy": [(5, 0, None)],
-    "27_us_dc_i66_us29_whitehurst": [(3, 0, None)],
-    "28_us_or_portland_region_fremont_i405_us30_i5": [(3, 0, None), (3, 0, None)],
 }
 
 #: files not yet read right, and why (the issue's reading patterns)
 NOT_YET = {
     "20_au_sydney_a4_bradfield_cahill": "no interchange found: motorways meeting directly, ref A4 <-> none",
-    "23_us_or_portland_i5_i405_marquam": "connectors tagged motorway with a ref running beside I-5 (patterns 4, 5)",
-    "24_us_ma_boston_i93_us1": "route concurrency I 93;US 1 splits one fork into two (pattern 1)",
-    "25_us_ma_boston_i90_ma1a": "I-90 merging directly into MA 1A carriageways (no links): legs miscounted",
     "26_us_dc_i66_us50_e_st_expwy": "5 motorways in one cluster, concurrency I 66;US 50 (patterns 1, 2)",
-    "27_us_dc_i66_us29_whitehurst": "connectors tagged motorway without ref or oneway (pattern 5)",
-    "28_us_or_portland_region_fremont_i405_us30_i5": "ref changes at both ends (I 405;US 30) (patterns 1, 3)",
 }
 
 

@@ -408,6 +408,16 @@ class _Builder:
         refs = [self.nw.ref[w] for w in s.ways if self.nw.ref[w]]
         return refs[0] if refs else None
 
+    def _ref_match(self, a: _Stretch, b: _Stretch) -> int:
+        """2: same ref; 1: a ref missing, or routes in common (concurrency ``I 81;US 322``
+        beside ``I 81``); 0: different routes."""
+        ra, rb = self._stretch_ref(a), self._stretch_ref(b)
+        if ra is None or rb is None:
+            return 1
+        if ra == rb:
+            return 2
+        return 1 if set(ra.split(";")) & set(rb.split(";")) else 0
+
     def _group_roads(self) -> None:
         nxt: dict[int, int] = {}
         prv: dict[int, int] = {}
@@ -415,21 +425,27 @@ class _Builder:
         for n in nodes:
             ins = [s for s in self.ends[n] if s.cls == ROAD]
             outs = [s for s in self.starts[n] if s.cls == ROAD]
+            if not ins or not outs:
+                continue
+            # carriageways go on by continuity: the best ref match first, then the straightest;
+            # a ref change on a plain continuation (one in, one out) still goes on
+            scored = []
             for i in ins:
-                cands = [o for o in outs if o.idx not in prv]
-                same = [o for o in cands if self._stretch_ref(o) == self._stretch_ref(i)
-                        or self._stretch_ref(o) is None or self._stretch_ref(i) is None]
-                if len(ins) == 1 and len(outs) == 1:
-                    same = cands
-                if not same:
-                    continue
                 d_in = _unit(i.xy[-1] - i.xy[-2])
-                best = max(same, key=lambda o: float(np.dot(d_in, _unit(o.xy[1] - o.xy[0]))))
-                nxt[i.idx], prv[best.idx] = best.idx, i.idx
+                for o in outs:
+                    match = self._ref_match(i, o)
+                    if match == 0 and not (len(ins) == 1 and len(outs) == 1):
+                        continue
+                    align = float(np.dot(d_in, _unit(o.xy[1] - o.xy[0])))
+                    scored.append((-match, -align, i.idx, o.idx))
+            for _, _, i, o in sorted(scored):
+                if i not in nxt and o not in prv:
+                    nxt[i], prv[o] = o, i
             if len(outs) > 1 or len(ins) > 1:
                 unpaired = [s.idx for s in outs if s.idx not in prv] + [s.idx for s in ins if s.idx not in nxt]
                 if unpaired:
-                    self.nw.quirk(f"node {n}: carriageways meet without a link (stretches {unpaired})")
+                    self.nw.quirk(f"node {n}: carriageways meet without a link (stretches {unpaired}): "
+                                  "joined by a direct ramp")
         seen: set[int] = set()
         road_idx = [s.idx for s in self.st if s.cls == ROAD]
         heads = [i for i in road_idx if i not in prv] + road_idx  # cycles last
@@ -458,7 +474,46 @@ class _Builder:
             self.groups.append(g)
             for c in chain:
                 self.group_of[c] = g.gid
+        self._unify_corridors()
         self._fill_missing_refs()
+
+    def _unify_corridors(self) -> None:
+        """Refs met along one carriageway (a route joining or leaving, a route number changing)
+        are one corridor, named by the ref covering most length."""
+        parent: dict[str, str] = {}
+
+        def find(r):
+            while parent.setdefault(r, r) != r:
+                r = parent[r]
+            return r
+
+        length = Counter()
+        for g in self.groups:
+            refs = []
+            for c in g.stretches:
+                st = self.st[c]
+                for w in st.ways:
+                    if self.nw.ref[w]:
+                        refs.append(self.nw.ref[w])
+                        length[self.nw.ref[w]] += st.length / len(st.ways)
+            for r in refs[1:]:
+                a, b = find(refs[0]), find(r)
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+        members = defaultdict(list)
+        for r in list(parent):
+            members[find(r)].append(r)
+        name = {}
+        for rs in members.values():
+            best = max(sorted(rs), key=lambda r: length[r])
+            for r in rs:
+                name[r] = best
+            if len(rs) > 1:
+                self.nw.quirk(f"refs {', '.join(sorted(rs))} follow one another along a carriageway: "
+                              f"one corridor {best}")
+        for g in self.groups:
+            if g.corridor is not None:
+                g.corridor = name.get(g.corridor, g.corridor)
 
     def _fill_missing_refs(self) -> None:
         self._pair_missing_refs(with_ref=True)
@@ -502,6 +557,59 @@ class _Builder:
             return s.xy[-2]
         return point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length))
 
+    def _lanes(self, gid: int) -> int:
+        vals = [self.nw.net.ways[w].tag("lanes") for w in self.groups[gid].ways]
+        vals = [int(v) for v in vals if v and v.isdigit()]
+        return max(vals) if vals else 0
+
+    def _direct_edges(self, n: int, ri: list[_Stretch], ro: list[_Stretch]) -> list:
+        """Carriageways meeting without a link: a carriageway that begins at a diverge (ends at
+        a merge) of another is joined to it by a ramp of no length, ``("direct", n)``: the
+        through carriageway ``Out-R``/``Out-L`` → ramp → ``In-M`` the branch (branch ``Out-M``
+        → ramp → ``In-R``/``In-L`` the through carriageway)."""
+        p = self.nw.xy[n]
+        edges = []
+        through = [(i, o) for i in ri for o in ro if self.group_of[i.idx] == self.group_of[o.idx]]
+        ramp = ("direct", n)
+        if not through and len(ro) >= 2 and not ri or len(ri) >= 2 and not ro:
+            # carriageways split (merge) right at the extract edge: the main one goes on
+            group = ro or ri
+            main = max(group, key=lambda s: (self._lanes(self.group_of[s.idx]),
+                                              len(self.groups[self.group_of[s.idx]].xy) and
+                                              float(arclength(self.groups[self.group_of[s.idx]].xy)[-1]), -s.idx))
+            g = ("road", self.group_of[main.idx])
+            b = next(s for s in group if s is not main)
+            if ro:
+                d = _unit(self._probe_out(main) - p)
+                side = "left" if _cross(d, _unit(self._probe_out(b) - p)) > 0 else "right"
+                edges += [(g, ramp, Label.of(True, side), n), (ramp, ("road", self.group_of[b.idx]), Label.IN_M, n)]
+            else:
+                d = _unit(p - self._probe_in(main))
+                side = "left" if _cross(d, _unit(self._probe_in(b) - p)) > 0 else "right"
+                edges += [(("road", self.group_of[b.idx]), ramp, Label.OUT_M, n), (ramp, g, Label.of(False, side), n)]
+            self.nw.quirk(f"node {n}: carriageways split or merge at the extract edge: "
+                          f"way {b.ways[0]} joined to way {main.ways[0]} by a direct ramp")
+            return edges
+        if not through:
+            return edges
+        i, o = through[0]
+        g = ("road", self.group_of[i.idx])
+        branches_out = [s for s in ro if s is not o]
+        branches_in = [s for s in ri if s is not i]
+        if branches_out:
+            d_out = _unit(p - self._probe_in(i))
+            ref = _cross(d_out, _unit(self._probe_out(o) - p))
+            b = branches_out[0]
+            side = "left" if _cross(d_out, _unit(self._probe_out(b) - p)) > ref else "right"
+            edges += [(g, ramp, Label.of(True, side), n), (ramp, ("road", self.group_of[b.idx]), Label.IN_M, n)]
+        elif branches_in:
+            d_in = _unit(self._probe_out(o) - p)
+            ref = _cross(d_in, _unit(self._probe_in(i) - p))
+            b = branches_in[0]
+            side = "left" if _cross(d_in, _unit(self._probe_in(b) - p)) > ref else "right"
+            edges += [(("road", self.group_of[b.idx]), ramp, Label.OUT_M, n), (ramp, g, Label.of(False, side), n)]
+        return edges
+
     def junction_edges(self, n: int) -> list[tuple[tuple[str, int], tuple[str, int], Label, int]]:
         """Edges (source key, target key, label, junction node) at node ``n``."""
         ins, outs = self.ends[n], self.starts[n]
@@ -509,10 +617,10 @@ class _Builder:
         ro = [s for s in outs if s.cls == ROAD]
         li = [s for s in ins if s.cls == LINK]
         lo = [s for s in outs if s.cls == LINK]
-        if not li and not lo:
-            return []
         p = self.nw.xy[n]
         edges = []
+        if not li and not lo:
+            return self._direct_edges(n, ri, ro)
 
         def lateral_out(d_ref, s):
             return _cross(d_ref, _unit(self._probe_out(s) - p))
@@ -726,6 +834,9 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
     return sorted(out, key=lambda t: t.name)
 
 
+#: link groups of the same two corridors joined to a same carriageway cluster up to this times ``cluster_distance_m``
+_SHARED_CARRIAGEWAY_FACTOR = 2.0
+
 #: parts of a network closer than this (m) are read together (snapping, opposite carriageways)
 _PART_GAP_M = 250.0
 
@@ -836,6 +947,10 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     corridor_sets = [{b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
                      for ci in range(len(comps))]
     point_sets: dict[int, np.ndarray] = {}
+    group_sets = [{k[1] for e in comp_edges[ci] for k in e[:2] if k[0] == "road"} for ci in range(len(comps))]
+
+    def groups(ci):
+        return group_sets[ci]
 
     def corridors(ci):
         return corridor_sets[ci]
@@ -871,7 +986,10 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
                 continue
             pi, pj = points(ci), points(cj)
             d = np.sqrt(((pi[:, None, :] - pj[None, :, :]) ** 2).sum(-1)).min()
-            if d <= options.cluster_distance_m:
+            # joined to a same carriageway (a split or merge without links
+            # a little away from the flyovers): one interchange a little further apart
+            shared = bool(groups(ci) & groups(cj))
+            if d <= options.cluster_distance_m * (_SHARED_CARRIAGEWAY_FACTOR if shared else 1.0):
                 close.append((ci, cj))
     clusters = _components(multi, close)
     out, failed = [], []
