@@ -40,7 +40,12 @@ README_ROWS = {
     "20_au_sydney_a4_bradfield_cahill": [(3, 1, None)],
     "21_us_or_portland_i5_i84": [(3, 0, None)],
     "22_us_or_portland_i405_us26": [(3, 0, None)],
+    "23_us_or_portland_i5_i405_marquam": [(3, 0, None)],
+    "24_us_ma_boston_i93_us1": [(3, 2, None)],
+    "25_us_ma_boston_i90_ma1a": [(3, 0, None)],
     "26_us_dc_i66_us50_e_st_expwy": [(5, 0, None)],
+    "27_us_dc_i66_us29_whitehurst": [(3, 0, None)],
+    "28_us_or_portland_region_fremont_i405_us30_i5": [(3, 0, None), (3, 0, None)],
 }
 
 #: files not yet read right, and why (the issue's reading patterns)
