@@ -142,3 +142,47 @@ def test_bbox_reads_only_the_motorways_inside():
     for t in cut:
         lat0, lon0 = t.attrs["osm"]["origin"]
         assert box[0] - 0.02 < lon0 < box[2] + 0.02 and box[1] - 0.02 < lat0 < box[3] + 0.02
+
+
+# -- the self-check ------------------------------------------------------------------------
+
+def test_self_check_flags_the_five_leg_interchange_read_with_six():
+    """File 26 is 5 legs on the map; while it reads as 6 the self-check says so."""
+    from flyover.osm.check import ring_legs, self_check
+
+    [t] = read_osm_topologies(OSM_DIR / "26_us_dc_i66_us50_e_st_expwy.osm", OsmOptions())
+    assert ring_legs(t)[0] == 5
+    rows = self_check(t)
+    assert (t.legs == 5) == (not [r for r in rows if r["check"] == "legs"])
+
+
+@pytest.mark.parametrize("stem", ["13_pt_porto_a41_a43", "09_us_oh_columbus_i70_i270_west",
+                                  "24_us_ma_boston_i93_us1", "22_us_or_portland_i405_us26"])
+def test_self_check_agrees_where_the_reading_is_right(stem):
+    [t] = read_osm_topologies(OSM_DIR / f"{stem}.osm", OsmOptions())
+    assert t.attrs["osm"]["self_check"] == []
+
+
+def test_self_check_rows_are_the_city_notes(tmp_path):
+    from flyover.topology.city import import_city
+
+    src = OSM_DIR / "26_us_dc_i66_us50_e_st_expwy.osm"
+    index = import_city("dc", [src], tmp_path / "dc", osm_options=OsmOptions())
+    [t] = read_osm_topologies(src, OsmOptions())
+    assert len(index["notes"]) == len(t.attrs["osm"]["self_check"])
+    for row in index["notes"]:
+        assert row["source_file"] == str(src) and row["interchange"] == t.name
+        assert Path(row["preview"]).is_file() and row["check"] in ("legs", "shape", "ramp")
+
+
+def test_a_ramp_back_onto_its_own_carriageway_is_a_self_check_row():
+    from flyover.osm.check import self_check
+    from flyover.topology import Connection, Label, Ramp, Road, Topology
+
+    roads = [Road("A1", "A"), Road("A2", "A"), Road("B1", "B"), Road("B2", "B")]
+    conns = [Connection("A1", "r1", Label.OUT_R), Connection("r1", "B1", Label.IN_R),
+             Connection("B2", "r2", Label.OUT_R), Connection("r2", "B2", Label.IN_R)]
+    t = Topology.build("x", roads, [Ramp("r1"), Ramp("r2")], conns,
+                       attrs={"osm": {"junctions": [([0.0, 0.0], "A1", "r1", "Out-R")], "lines": {}}})
+    rows = [r for r in self_check(t) if r["check"] == "ramp"]
+    assert len(rows) == 1 and "r2" in rows[0]["detail"] and "same carriageway B2" in rows[0]["detail"]

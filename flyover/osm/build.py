@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flyover.errors import TopologyError
+from flyover.osm.check import self_check
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
 from flyover.osm.reader import OsmNetwork, normalize_ref
@@ -837,6 +838,9 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
 #: link groups of the same two corridors joined to a same carriageway cluster up to this times ``cluster_distance_m``
 _SHARED_CARRIAGEWAY_FACTOR = 2.0
 
+#: how far (m) beyond its first and last junction a carriageway is kept for the self-check
+_CHECK_REACH_M = 1500.0
+
 #: parts of a network closer than this (m) are read together (snapping, opposite carriageways)
 _PART_GAP_M = 250.0
 
@@ -996,7 +1000,11 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     for cl in clusters:
         cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
         try:
-            out.append(_topology(nw, b, cl_edges))
+            t = _topology(nw, b, cl_edges)
+            t.attrs["osm"]["self_check"] = self_check(t)
+            for row in t.attrs["osm"]["self_check"]:
+                log.warning("%s: %s: self-check %s: %s", nw.src, t.name, row["check"], row["detail"])
+            out.append(t)
         except TopologyError as exc:
             exc.located(nw.src)
             failed.append(exc)
@@ -1068,7 +1076,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             lo, hi = window[road[1]]
             pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
         conns.append(Connection(nid(src), nid(dst), label, pos))
-    roads, node_attrs, lines = [], {}, {}
+    roads, node_attrs, lines, carriageways = [], {}, {}, {}
     for g in road_gids:
         grp = b.groups[g]
         lo, hi = window[g]
@@ -1079,6 +1087,9 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         roads.append(Road(road_id[g], exp_of[g], lanes_of(ways_in)))
         node_attrs[road_id[g]] = {"osm_ways": " ".join(map(str, ways_in)), "ref": grp.corridor}
         lines[road_id[g]] = grp.xy[inside].tolist()
+        s_j = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
+        reach = (cum >= min(s_j) - _CHECK_REACH_M) & (cum <= max(s_j) + _CHECK_REACH_M)
+        carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach]).round(1).tolist()
     for n in local_nodes:
         tags = net.ordinary.get(n, {})
         label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
@@ -1114,6 +1125,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         "junctions": [(nw.unmirrored(nw.xy[n])[0].tolist(), nid(src), nid(dst), label.value)
                       for src, dst, label, n in edges],
         "driving_side": nw.side,
+        "carriageways": carriageways,
         "quirks": list(nw.quirks),
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }
