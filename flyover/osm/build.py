@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flyover.errors import TopologyError
-from flyover.osm.check import self_check
+from flyover.osm.check import RING_MARGIN_M, self_check
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
 from flyover.osm.reader import OsmNetwork, normalize_ref
@@ -1077,6 +1077,9 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
         conns.append(Connection(nid(src), nid(dst), label, pos))
     roads, node_attrs, lines, carriageways = [], {}, {}, {}
+    junction_xy = np.array([nw.xy[n] for n in junction_nodes])
+    ring_centre = junction_xy.mean(axis=0)
+    ring_radius = float(np.hypot(*(junction_xy - ring_centre).T).max()) + RING_MARGIN_M + 50.0
     for g in road_gids:
         grp = b.groups[g]
         lo, hi = window[g]
@@ -1089,7 +1092,10 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         lines[road_id[g]] = grp.xy[inside].tolist()
         s_j = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
         reach = (cum >= min(s_j) - _CHECK_REACH_M) & (cum <= max(s_j) + _CHECK_REACH_M)
-        carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach]).round(1).tolist()
+        # only what the self-check's ring can meet: points inside it and their neighbours
+        near = np.hypot(*(grp.xy - ring_centre).T) <= ring_radius
+        near = near | np.concatenate([near[1:], [False]]) | np.concatenate([[False], near[:-1]])
+        carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach & near]).round(1).tolist()
     for n in local_nodes:
         tags = net.ordinary.get(n, {})
         label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
