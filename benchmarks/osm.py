@@ -30,7 +30,7 @@ from pathlib import Path
 
 import osmium
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "osm"
+SHARED = Path(os.environ.get("FLYOVER_OSM_DIR") or Path(__file__).resolve().parents[1].parent / "shared" / "osm")
 ID_SPREAD = 1000  # tiled ids are (rank among all tiles) * spread: ~10^10 for a metro, as OSM ids today
 GRID_DEG = 0.08      # copies sit on a grid of this step (about 9 km), each a separate place
 
