@@ -337,6 +337,34 @@ class _Network:
                 self.quirk(f"way(s) {', '.join(map(str, st.ways))}: tagged motorway without ref, "
                            f"{st.length:.0f} m, {why}: treated as motorway_link")
 
+    def extend_cut_carriageways(self) -> None:
+        """A carriageway tagged ``motorway_link`` past the interchange that leaves the extract
+        (Sydney's Cahill Expressway): a link chain whose free end lies at the extract edge
+        (no ordinary road there) is, from that end on, a carriageway while its ways carry
+        the name of a motorway carriageway of the network and run straight (turn < 90°)."""
+        names = {self.net.ways[w].tag("name") for w, c in self.cls.items() if c == ROAD} - {None}
+        if not names:
+            return
+        for st in self.build_stretches():
+            if st.cls != LINK:
+                continue
+            for free, order in ((st.start, st.ways), (st.end, st.ways[::-1])):
+                if self.pred[free] if free == st.start else self.succ[free]:
+                    continue
+                if free in self.net.ordinary:
+                    continue
+                changed = []
+                for w in order:
+                    way = self.net.ways[w]
+                    if way.tag("name") not in names or _turn_deg(self, way.nodes) >= 90.0:
+                        break
+                    self.cls[w] = ROAD
+                    changed.append(w)
+                if changed:
+                    self.quirk(f"link way(s) {', '.join(map(str, changed))} named like a carriageway "
+                               f"({self.net.ways[changed[0]].tag('name')}) leave the extract: read as "
+                               "that carriageway")
+
     # -- 4. pruning -------------------------------------------------------
     def prune_links(self) -> None:
         on_road = {n for (a, b), w in self.seg.items() if self.cls[w] == ROAD for n in (a, b)}
@@ -379,6 +407,17 @@ class _RoadGroup:
     s_of: dict[int, float]
     corridor: str | None
     ways: list[int]
+
+
+def _turn_deg(nw: "_Network", nodes) -> float:
+    """Total heading change along a way's nodes (degrees, absolute)."""
+    xy = np.array([nw.xy[n] for n in nodes if n in nw.xy]).reshape(-1, 2)
+    d = np.diff(xy, axis=0)
+    d = d[np.hypot(*d.T) > 0.5]
+    if len(d) < 2:
+        return 0.0
+    da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
+    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -931,6 +970,7 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     nw.add_ways()
     nw.snap_dangling_links()
     nw.reclassify_connectors()
+    nw.extend_cut_carriageways()
     if not options.keep_exits:
         nw.prune_links()
     b = _Builder(nw)
