@@ -2,17 +2,18 @@
 
 One reader for every format, through pyosmium (the Python binding of
 libosmium, ``osmium`` on PyPI), which decodes XML, compressed XML and PBF in
-C++. The file is read three times, with filters run inside libosmium so that
-only what is needed reaches Python:
+C++. The file is read twice, with filters run inside libosmium so that only
+what is needed reaches Python:
 
 1. ways tagged ``highway=motorway|motorway_link`` (and ``trunk|trunk_link``
-   when asked);
-2. the locations (and ``ele``) of their nodes, picked by a node-id index
-   (``osmium.IdTracker``) in libosmium: the other nodes never reach Python;
-3. the ordinary ``highway=*`` ways touching a node of that network (exits to
-   ordinary roads), picked by the same index.
+   when asked), with their nodes' coordinates from libosmium's node-location
+   index (``flex_mem``: dense or sparse as the ids are); no node object
+   reaches Python;
+2. the ``highway=*`` ways (an ordinary road touching the network is an exit)
+   and the nodes tagged ``ele`` or ``highway``.
 
-Memory grows with the motorway network, not with the file.
+Memory: the node-location index (8–16 bytes per node of the file) and the
+motorway network.
 """
 
 from __future__ import annotations
@@ -138,64 +139,62 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
     ways: dict[int, OsmWay] = {}
     coords: dict[int, tuple[float, float]] = {}
     try:
-        # 1. the network's ways (tag filter in libosmium)
+        # 1. the network's ways (tag filter in libosmium) with their nodes' locations
+        #    (node-location index in libosmium: no node reaches Python)
         flt = osmium.filter.TagFilter(*(("highway", h) for h in sorted(highways)))
-        for w in osmium.FileProcessor(src, osmium.osm.WAY).with_filter(flt):
-            nodes = tuple(nd.ref for nd in w.nodes)
+        proc = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY).with_locations("flex_mem") \
+            .with_filter(osmium.filter.EntityFilter(osmium.osm.WAY)).with_filter(flt)
+        for w in proc:
+            nodes, pts = [], []
+            for nd in w.nodes:
+                nodes.append(nd.ref)
+                loc = nd.location
+                if loc.valid():
+                    pts.append((nd.ref, loc.lat, loc.lon))
             if len(nodes) < 2:
                 log.warning("%s: way %d: fewer than two nodes, ignored", src, w.id)
                 continue
+            if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
+                                             for _, lat, lon in pts):
+                continue
             tags = {t.k: t.v for t in w.tags}
-            ways[w.id] = OsmWay(w.id, nodes, tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
-        tracker = osmium.IdTracker()
-        for w in ways.values():
-            for n in w.nodes:
-                tracker.add_node(n)
-        # 2. the locations (and ele) of their nodes only: an id index in libosmium
-        bad: list[int] = []
-        if ways:
-            for o in osmium.FileProcessor(src, osmium.osm.NODE).with_filter(tracker.id_filter()):
-                loc = o.location
-                if not loc.valid():
-                    bad.append(o.id)
-                    continue
-                coords[o.id] = (loc.lat, loc.lon)
-                if "ele" in o.tags:
-                    ele = _ele(o.tags["ele"])
-                    if ele is None:
-                        log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
-                    else:
-                        net.elevation[o.id] = ele
-        if bbox is not None:
-            ways = {wid: w for wid, w in ways.items()
-                    if any(n in coords and bbox[0] <= coords[n][1] <= bbox[2] and bbox[1] <= coords[n][0] <= bbox[3]
-                           for n in w.nodes)}
+            ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
+            for ref, lat, lon in pts:
+                coords[ref] = (lat, lon)
         needed = {n for w in ways.values() for n in w.nodes}
-        # 3. ordinary roads touching the network (exits): ways referring to a tracked node
+        # 2. ordinary roads touching the network (exits) and the ele of network nodes
         if ways:
-            second = osmium.FileProcessor(src, osmium.osm.WAY) \
-                .with_filter(osmium.filter.KeyFilter("highway")).with_filter(tracker.contains_filter())
+            second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
+                .with_filter(osmium.filter.KeyFilter("highway", "ele"))
             for o in second:
+                if o.is_node():
+                    if "ele" in o.tags and o.id in needed:
+                        ele = _ele(o.tags["ele"])
+                        if ele is None:
+                            log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
+                        else:
+                            net.elevation[o.id] = ele
+                    continue
                 hw = o.tags.get("highway")
                 if hw is None or hw in highways:
                     continue
                 info = None
                 for nd in o.nodes:
-                    if nd.ref in needed and nd.ref not in net.ordinary:
+                    ref = nd.ref
+                    if ref in needed and ref not in net.ordinary:
                         if info is None:
                             info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
-                        net.ordinary[nd.ref] = info
+                        net.ordinary[ref] = info
     except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
         # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
         raise _format_error(src, exc) from None
-    coords = {n: coords[n] for n in sorted(needed) if n in coords}
-    missing = sorted((wid, n) for wid, w in ways.items() for n in w.nodes if n not in coords)
+    missing = [(wid, n) for wid, w in ways.items() for n in w.nodes if n not in coords]
+    missing.sort()
     net.ways, net.coords = ways, coords
     if missing:
         w0, n0 = missing[0]
         log.warning("%s: way %d refers to node %d, missing from the file or off the globe "
                     "(%d such reference(s)): the way is cut there", src, w0, n0, len(missing))
-    elif bad:
-        log.warning("%s: node %d off the globe", src, bad[0])
+
     log.info("%s: %d network ways, %d nodes", Path(src).name, len(net.ways), len(net.coords))
     return net
