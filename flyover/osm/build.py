@@ -137,7 +137,11 @@ class _Stretch:
 
     @property
     def length(self) -> float:
-        return float(arclength(self.xy)[-1])
+        cached = self.__dict__.get("_length")
+        if cached is None or cached[0] is not self.xy:  # xy is replaced when stretches are joined
+            cached = (self.xy, float(arclength(self.xy)[-1]))
+            self.__dict__["_length"] = cached
+        return cached[1]
 
 
 class _Network:
@@ -290,23 +294,29 @@ class _Network:
 
     # -- 5. stretches -----------------------------------------------------
     def _is_break(self, n: int) -> bool:
-        if len(self.pred[n]) != 1 or len(self.succ[n]) != 1:
+        pred, succ = self.pred.get(n, ()), self.succ.get(n, ())
+        if len(pred) != 1 or len(succ) != 1:
             return True
-        return self.seg_cls(self.pred[n][0], n) != self.seg_cls(n, self.succ[n][0])
+        cls, seg = self.cls, self.seg
+        return cls[seg[(pred[0], n)]] != cls[seg[(n, succ[0])]]
 
     def build_stretches(self) -> list[_Stretch]:
         out: list[_Stretch] = []
-        starts = sorted(n for n in list(self.succ) if self.succ[n] and self._is_break(n))
+        nodes_all = self.succ.keys() | self.pred.keys()
+        breaks = {n for n in nodes_all if self._is_break(n)}
+        starts = sorted(n for n in breaks if self.succ.get(n))
+        limit = len(self.seg) + 1
         for s0 in starts:
             for nxt in sorted(self.succ[s0]):
                 nodes, ways = [s0, nxt], [self.seg[(s0, nxt)]]
-                cls = self.seg_cls(s0, nxt)
-                while not self._is_break(nodes[-1]) and len(nodes) <= len(self.seg) + 1:
+                cls = self.cls[ways[0]]
+                while nodes[-1] not in breaks and len(nodes) <= limit:
                     a = nodes[-1]
                     b = self.succ[a][0]
                     nodes.append(b)
-                    if self.seg[(a, b)] != ways[-1]:
-                        ways.append(self.seg[(a, b)])
+                    w = self.seg[(a, b)]
+                    if w != ways[-1]:
+                        ways.append(w)
                 xy = np.array([self.xy[i] for i in nodes])
                 out.append(_Stretch(len(out), nodes, cls, ways, xy))
         return out
