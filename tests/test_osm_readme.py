@@ -52,7 +52,8 @@ README_ROWS = {
 NOT_YET = {
     "20_au_sydney_a4_bradfield_cahill": "only the loop and 2 roads: the Cahill Expressway eastbound and the "
                                         "bridge/A4 carriageways meeting directly are not yet read as roads",
-    "26_us_dc_i66_us50_e_st_expwy": "5 motorways in one cluster, concurrency I 66;US 50 (patterns 1, 2)",
+    "26_us_dc_i66_us50_e_st_expwy": "read as 6 legs: the ref-less Potomac Freeway south takes ref I 66 from "
+                                    "its opposite carriageway and becomes a second I-66 (patterns 2, 6)",
 }
 
 
