@@ -336,7 +336,9 @@ def test_trunk_counts_only_when_configured(tmp_path):
     ways = [dict(w, tags={**w["tags"], "highway": w["tags"]["highway"].replace("motorway", "trunk")})
             for w in trumpet_ways()]
     path = write_osm(tmp_path / "trunk.osm", ways)
-    assert read_osm_topologies(path, OsmOptions()) == []
+    with pytest.raises(InputFormatError, match="no motorway or motorway_link way") as err:
+        read_osm_topologies(path, OsmOptions())
+    assert str(path) in err.value.one_line()
     assert class_id(only(path, trunk_as_motorway=True)) == class_id(CATALOG["trumpet"])
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import os
 
+from flyover.errors import InputFormatError
 from flyover.osm.build import OsmOptions, build_topologies
 from flyover.osm.reader import OsmNetwork, read_motorway_network
 
@@ -32,14 +33,22 @@ def default_options() -> OsmOptions:
         return OsmOptions()
 
 
-def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = None):
-    """Every motorway-to-motorway interchange of an OSM XML extract, as topologies.
+def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = None, *, workers: int = 1):
+    """Every motorway-to-motorway interchange of an OSM extract, as topologies.
+
+    ``.osm``, ``.osm.gz``, ``.osm.bz2`` and ``.osm.pbf`` are read by one reader
+    (:func:`flyover.osm.reader.read_motorway_network`), cut to ``options.bbox`` if set.
 
     Each topology's name is stable (its corridors' refs and its first OSM
     node id); ``topology.attrs["osm"]`` carries the geometry for
     :func:`flyover.osm.plot.plot_osm_topology`, ramps carry ``length_m``,
-    ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``).
+    ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``). ``workers`` > 1
+    reads the places of a large extract in that many processes.
     """
     options = options or default_options()
-    net = read_motorway_network(path, options.highways)
-    return build_topologies(net, options)
+    net = read_motorway_network(path, options.highways, options.bbox)
+    if not net.ways:
+        where = " inside the bbox" if options.bbox else ""
+        raise InputFormatError(f"no {' or '.join(sorted(options.highways))} way{where}: "
+                               "not a motorway extract", source=str(path))
+    return build_topologies(net, options, workers=workers)

@@ -39,6 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flyover.errors import TopologyError
+from flyover.osm.check import RING_MARGIN_M, self_check
+from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
 from flyover.osm.reader import OsmNetwork, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
@@ -75,6 +77,13 @@ class OsmOptions:
         the carriageway (catalog ``trumpet``), not into the carriageway.
     connector_max_length_m
         A ``motorway`` stretch without ``ref`` between links up to this long is a link.
+    driving_side
+        ``"auto"`` (a ``driving_side`` tag on the ways, else the country the
+        extract lies in), ``"right"`` or ``"left"``. Left-hand traffic mirrors
+        the labels: a left-hand interchange reads as its right-hand mirror image.
+    bbox
+        ``(min_lon, min_lat, max_lon, max_lat)``: only network ways with a node
+        inside are read (the city's entry under ``osm.city_bbox`` in the config).
     """
 
     trunk_as_motorway: bool = False
@@ -83,10 +92,21 @@ class OsmOptions:
     cluster_distance_m: float = 600.0
     stem_length_m: float = 250.0
     connector_max_length_m: float = 400.0
+    driving_side: str = "auto"
+    bbox: tuple[float, float, float, float] | None = None
 
     @classmethod
-    def from_config(cls, config: dict) -> "OsmOptions":
+    def from_config(cls, config: dict, city: str | None = None) -> "OsmOptions":
+        """Options from ``config["osm"]``; ``city`` picks its bbox from ``osm.city_bbox``
+        (a section already cut to one city may carry it as ``bbox``)."""
         sec = dict(config.get("osm") or {})
+        box = (sec.get("city_bbox") or {}).get(city) if city is not None else sec.get("bbox")
+        sec["bbox"] = tuple(float(v) for v in box) if box is not None else None
+        if sec["bbox"] is not None and (len(sec["bbox"]) != 4 or not (
+                sec["bbox"][0] < sec["bbox"][2] and sec["bbox"][1] < sec["bbox"][3])):
+            from flyover.errors import ConfigError  # noqa: PLC0415
+            raise ConfigError("bbox must be [min_lon, min_lat, max_lon, max_lat] with min < max",
+                              element=f"osm.city_bbox.{city}" if city else "osm.bbox")
         return cls(**{k: sec[k] for k in cls.__dataclass_fields__ if k in sec})
 
     @property
@@ -117,7 +137,11 @@ class _Stretch:
 
     @property
     def length(self) -> float:
-        return float(arclength(self.xy)[-1])
+        cached = self.__dict__.get("_length")
+        if cached is None or cached[0] is not self.xy:  # xy is replaced when stretches are joined
+            cached = (self.xy, float(arclength(self.xy)[-1]))
+            self.__dict__["_length"] = cached
+        return cached[1]
 
 
 class _Network:
@@ -136,6 +160,13 @@ class _Network:
         ids = list(net.coords)
         xy = self.proj.xy([net.coords[i][0] for i in ids], [net.coords[i][1] for i in ids]) \
             if ids else np.zeros((0, 2))
+        self.side = self._driving_side()
+        self.mirror = 1.0
+        if self.side == "left":  # left-hand traffic: read in a mirror, labels come out mirrored
+            self.mirror = -1.0
+            xy = xy * np.array([-1.0, 1.0])
+            self.quirk("left-hand traffic: the interchange is read mirrored (labels as its "
+                       "right-hand mirror image)")
         self.xy: dict[int, np.ndarray] = {i: xy[k] for k, i in enumerate(ids)}
         self.seg: dict[tuple[int, int], int] = {}   # (a, b) -> way id
         self.cls: dict[int, str] = {}                # way id -> road|link
@@ -143,6 +174,18 @@ class _Network:
         self.succ: dict[int, list[int]] = defaultdict(list)
         self.pred: dict[int, list[int]] = defaultdict(list)
         self._next_virtual = -1
+
+    def _driving_side(self) -> str:
+        if self.opt.driving_side in ("left", "right"):
+            return self.opt.driving_side
+        tagged = Counter(w.tag("driving_side") for w in self.net.ways.values() if w.tag("driving_side"))
+        if tagged:
+            return tagged.most_common(1)[0][0]
+        return driving_side_at(self.proj.lat0, self.proj.lon0)
+
+    def unmirrored(self, xy) -> np.ndarray:
+        """Map coordinates as they are on the ground (undo the left-hand-traffic mirror)."""
+        return np.asarray(xy, float).reshape(-1, 2) * np.array([self.mirror, 1.0])
 
     def quirk(self, msg: str, level: int = logging.INFO) -> None:
         self.quirks.append(msg)
@@ -251,23 +294,29 @@ class _Network:
 
     # -- 5. stretches -----------------------------------------------------
     def _is_break(self, n: int) -> bool:
-        if len(self.pred[n]) != 1 or len(self.succ[n]) != 1:
+        pred, succ = self.pred.get(n, ()), self.succ.get(n, ())
+        if len(pred) != 1 or len(succ) != 1:
             return True
-        return self.seg_cls(self.pred[n][0], n) != self.seg_cls(n, self.succ[n][0])
+        cls, seg = self.cls, self.seg
+        return cls[seg[(pred[0], n)]] != cls[seg[(n, succ[0])]]
 
     def build_stretches(self) -> list[_Stretch]:
         out: list[_Stretch] = []
-        starts = sorted(n for n in list(self.succ) if self.succ[n] and self._is_break(n))
+        nodes_all = self.succ.keys() | self.pred.keys()
+        breaks = {n for n in nodes_all if self._is_break(n)}
+        starts = sorted(n for n in breaks if self.succ.get(n))
+        limit = len(self.seg) + 1
         for s0 in starts:
             for nxt in sorted(self.succ[s0]):
                 nodes, ways = [s0, nxt], [self.seg[(s0, nxt)]]
-                cls = self.seg_cls(s0, nxt)
-                while not self._is_break(nodes[-1]) and len(nodes) <= len(self.seg) + 1:
+                cls = self.cls[ways[0]]
+                while nodes[-1] not in breaks and len(nodes) <= limit:
                     a = nodes[-1]
                     b = self.succ[a][0]
                     nodes.append(b)
-                    if self.seg[(a, b)] != ways[-1]:
-                        ways.append(self.seg[(a, b)])
+                    w = self.seg[(a, b)]
+                    if w != ways[-1]:
+                        ways.append(w)
                 xy = np.array([self.xy[i] for i in nodes])
                 out.append(_Stretch(len(out), nodes, cls, ways, xy))
         return out
@@ -297,6 +346,34 @@ class _Network:
                 why = "fed by links" if fed_by_links else "feeding links" if feeds_links else "forking"
                 self.quirk(f"way(s) {', '.join(map(str, st.ways))}: tagged motorway without ref, "
                            f"{st.length:.0f} m, {why}: treated as motorway_link")
+
+    def extend_cut_carriageways(self) -> None:
+        """A carriageway tagged ``motorway_link`` past the interchange that leaves the extract
+        (Sydney's Cahill Expressway): a link chain whose free end lies at the extract edge
+        (no ordinary road there) is, from that end on, a carriageway while its ways carry
+        the name of a motorway carriageway of the network and run straight (turn < 90°)."""
+        names = {self.net.ways[w].tag("name") for w, c in self.cls.items() if c == ROAD} - {None}
+        if not names:
+            return
+        for st in self.build_stretches():
+            if st.cls != LINK:
+                continue
+            for free, order in ((st.start, st.ways), (st.end, st.ways[::-1])):
+                if self.pred[free] if free == st.start else self.succ[free]:
+                    continue
+                if free in self.net.ordinary:
+                    continue
+                changed = []
+                for w in order:
+                    way = self.net.ways[w]
+                    if way.tag("name") not in names or _turn_deg(self, way.nodes) >= 90.0:
+                        break
+                    self.cls[w] = ROAD
+                    changed.append(w)
+                if changed:
+                    self.quirk(f"link way(s) {', '.join(map(str, changed))} named like a carriageway "
+                               f"({self.net.ways[changed[0]].tag('name')}) leave the extract: read as "
+                               "that carriageway")
 
     # -- 4. pruning -------------------------------------------------------
     def prune_links(self) -> None:
@@ -342,6 +419,17 @@ class _RoadGroup:
     ways: list[int]
 
 
+def _turn_deg(nw: "_Network", nodes) -> float:
+    """Total heading change along a way's nodes (degrees, absolute)."""
+    xy = np.array([nw.xy[n] for n in nodes if n in nw.xy]).reshape(-1, 2)
+    d = np.diff(xy, axis=0)
+    d = d[np.hypot(*d.T) > 0.5]
+    if len(d) < 2:
+        return 0.0
+    da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
+    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     n = float(np.hypot(*v))
     return v / n if n > 0 else v
@@ -370,6 +458,16 @@ class _Builder:
         refs = [self.nw.ref[w] for w in s.ways if self.nw.ref[w]]
         return refs[0] if refs else None
 
+    def _ref_match(self, a: _Stretch, b: _Stretch) -> int:
+        """2: same ref; 1: a ref missing, or routes in common (concurrency ``I 81;US 322``
+        beside ``I 81``); 0: different routes."""
+        ra, rb = self._stretch_ref(a), self._stretch_ref(b)
+        if ra is None or rb is None:
+            return 1
+        if ra == rb:
+            return 2
+        return 1 if set(ra.split(";")) & set(rb.split(";")) else 0
+
     def _group_roads(self) -> None:
         nxt: dict[int, int] = {}
         prv: dict[int, int] = {}
@@ -377,21 +475,27 @@ class _Builder:
         for n in nodes:
             ins = [s for s in self.ends[n] if s.cls == ROAD]
             outs = [s for s in self.starts[n] if s.cls == ROAD]
+            if not ins or not outs:
+                continue
+            # carriageways go on by continuity: the best ref match first, then the straightest;
+            # a ref change on a plain continuation (one in, one out) still goes on
+            scored = []
             for i in ins:
-                cands = [o for o in outs if o.idx not in prv]
-                same = [o for o in cands if self._stretch_ref(o) == self._stretch_ref(i)
-                        or self._stretch_ref(o) is None or self._stretch_ref(i) is None]
-                if len(ins) == 1 and len(outs) == 1:
-                    same = cands
-                if not same:
-                    continue
                 d_in = _unit(i.xy[-1] - i.xy[-2])
-                best = max(same, key=lambda o: float(np.dot(d_in, _unit(o.xy[1] - o.xy[0]))))
-                nxt[i.idx], prv[best.idx] = best.idx, i.idx
+                for o in outs:
+                    match = self._ref_match(i, o)
+                    if match == 0 and not (len(ins) == 1 and len(outs) == 1):
+                        continue
+                    align = float(np.dot(d_in, _unit(o.xy[1] - o.xy[0])))
+                    scored.append((-match, -align, i.idx, o.idx))
+            for _, _, i, o in sorted(scored):
+                if i not in nxt and o not in prv:
+                    nxt[i], prv[o] = o, i
             if len(outs) > 1 or len(ins) > 1:
                 unpaired = [s.idx for s in outs if s.idx not in prv] + [s.idx for s in ins if s.idx not in nxt]
                 if unpaired:
-                    self.nw.quirk(f"node {n}: carriageways meet without a link (stretches {unpaired})")
+                    self.nw.quirk(f"node {n}: carriageways meet without a link (stretches {unpaired}): "
+                                  "joined by a direct ramp")
         seen: set[int] = set()
         road_idx = [s.idx for s in self.st if s.cls == ROAD]
         heads = [i for i in road_idx if i not in prv] + road_idx  # cycles last
@@ -420,7 +524,46 @@ class _Builder:
             self.groups.append(g)
             for c in chain:
                 self.group_of[c] = g.gid
+        self._unify_corridors()
         self._fill_missing_refs()
+
+    def _unify_corridors(self) -> None:
+        """Refs met along one carriageway (a route joining or leaving, a route number changing)
+        are one corridor, named by the ref covering most length."""
+        parent: dict[str, str] = {}
+
+        def find(r):
+            while parent.setdefault(r, r) != r:
+                r = parent[r]
+            return r
+
+        length = Counter()
+        for g in self.groups:
+            refs = []
+            for c in g.stretches:
+                st = self.st[c]
+                for w in st.ways:
+                    if self.nw.ref[w]:
+                        refs.append(self.nw.ref[w])
+                        length[self.nw.ref[w]] += st.length / len(st.ways)
+            for r in refs[1:]:
+                a, b = find(refs[0]), find(r)
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+        members = defaultdict(list)
+        for r in list(parent):
+            members[find(r)].append(r)
+        name = {}
+        for rs in members.values():
+            best = max(sorted(rs), key=lambda r: length[r])
+            for r in rs:
+                name[r] = best
+            if len(rs) > 1:
+                self.nw.quirk(f"refs {', '.join(sorted(rs))} follow one another along a carriageway: "
+                              f"one corridor {best}")
+        for g in self.groups:
+            if g.corridor is not None:
+                g.corridor = name.get(g.corridor, g.corridor)
 
     def _fill_missing_refs(self) -> None:
         self._pair_missing_refs(with_ref=True)
@@ -464,6 +607,59 @@ class _Builder:
             return s.xy[-2]
         return point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length))
 
+    def _lanes(self, gid: int) -> int:
+        vals = [self.nw.net.ways[w].tag("lanes") for w in self.groups[gid].ways]
+        vals = [int(v) for v in vals if v and v.isdigit()]
+        return max(vals) if vals else 0
+
+    def _direct_edges(self, n: int, ri: list[_Stretch], ro: list[_Stretch]) -> list:
+        """Carriageways meeting without a link: a carriageway that begins at a diverge (ends at
+        a merge) of another is joined to it by a ramp of no length, ``("direct", n)``: the
+        through carriageway ``Out-R``/``Out-L`` → ramp → ``In-M`` the branch (branch ``Out-M``
+        → ramp → ``In-R``/``In-L`` the through carriageway)."""
+        p = self.nw.xy[n]
+        edges = []
+        through = [(i, o) for i in ri for o in ro if self.group_of[i.idx] == self.group_of[o.idx]]
+        ramp = ("direct", n)
+        if not through and len(ro) >= 2 and not ri or len(ri) >= 2 and not ro:
+            # carriageways split (merge) right at the extract edge: the main one goes on
+            group = ro or ri
+            main = max(group, key=lambda s: (self._lanes(self.group_of[s.idx]),
+                                              len(self.groups[self.group_of[s.idx]].xy) and
+                                              float(arclength(self.groups[self.group_of[s.idx]].xy)[-1]), -s.idx))
+            g = ("road", self.group_of[main.idx])
+            b = next(s for s in group if s is not main)
+            if ro:
+                d = _unit(self._probe_out(main) - p)
+                side = "left" if _cross(d, _unit(self._probe_out(b) - p)) > 0 else "right"
+                edges += [(g, ramp, Label.of(True, side), n), (ramp, ("road", self.group_of[b.idx]), Label.IN_M, n)]
+            else:
+                d = _unit(p - self._probe_in(main))
+                side = "left" if _cross(d, _unit(self._probe_in(b) - p)) > 0 else "right"
+                edges += [(("road", self.group_of[b.idx]), ramp, Label.OUT_M, n), (ramp, g, Label.of(False, side), n)]
+            self.nw.quirk(f"node {n}: carriageways split or merge at the extract edge: "
+                          f"way {b.ways[0]} joined to way {main.ways[0]} by a direct ramp")
+            return edges
+        if not through:
+            return edges
+        i, o = through[0]
+        g = ("road", self.group_of[i.idx])
+        branches_out = [s for s in ro if s is not o]
+        branches_in = [s for s in ri if s is not i]
+        if branches_out:
+            d_out = _unit(p - self._probe_in(i))
+            ref = _cross(d_out, _unit(self._probe_out(o) - p))
+            b = branches_out[0]
+            side = "left" if _cross(d_out, _unit(self._probe_out(b) - p)) > ref else "right"
+            edges += [(g, ramp, Label.of(True, side), n), (ramp, ("road", self.group_of[b.idx]), Label.IN_M, n)]
+        elif branches_in:
+            d_in = _unit(self._probe_out(o) - p)
+            ref = _cross(d_in, _unit(self._probe_in(i) - p))
+            b = branches_in[0]
+            side = "left" if _cross(d_in, _unit(self._probe_in(b) - p)) > ref else "right"
+            edges += [(("road", self.group_of[b.idx]), ramp, Label.OUT_M, n), (ramp, g, Label.of(False, side), n)]
+        return edges
+
     def junction_edges(self, n: int) -> list[tuple[tuple[str, int], tuple[str, int], Label, int]]:
         """Edges (source key, target key, label, junction node) at node ``n``."""
         ins, outs = self.ends[n], self.starts[n]
@@ -471,10 +667,10 @@ class _Builder:
         ro = [s for s in outs if s.cls == ROAD]
         li = [s for s in ins if s.cls == LINK]
         lo = [s for s in outs if s.cls == LINK]
-        if not li and not lo:
-            return []
         p = self.nw.xy[n]
         edges = []
+        if not li and not lo:
+            return self._direct_edges(n, ri, ro)
 
         def lateral_out(d_ref, s):
             return _cross(d_ref, _unit(self._probe_out(s) - p))
@@ -652,21 +848,139 @@ def interchange_name(corridors: list[str], first_node: int) -> tuple[str, dict]:
     return name, {"refs": parts, "osm_node": first_node}
 
 
-def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
+def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> list[Topology]:
     """Every motorway-to-motorway interchange of ``net`` as a topology.
 
     An interchange that breaks a model rule is logged and left out; the
     others are still returned.
+
+    The network is read place by place (:func:`split_network`); ``workers`` > 1
+    reads places in that many forked processes (same result, in the same order).
 
     Raises
     ------
     TopologyError
         Every interchange found breaks a model rule (the first one's reason).
     """
+    out, failed = [], []
+    parts = split_network(net, options)
+    if workers > 1 and len(parts) > 1:
+        import multiprocessing  # noqa: PLC0415
+
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            results = pool.starmap(_build_part_safe, [(p, options) for p in parts],
+                                   chunksize=max(1, len(parts) // (8 * workers)))
+    else:
+        results = [_build_part_safe(p, options) for p in parts]
+    for found, exc in results:
+        out += found
+        if exc is not None:
+            failed.append(exc)
+    if failed and not out:  # nothing usable: the file is rejected with the first reason
+        raise failed[0]
+    names = Counter(t.name for t in out)
+    for name in sorted(n for n, k in names.items() if k > 1):
+        log.warning("%s: duplicate interchange name %s", net.source, name)
+    return sorted(out, key=lambda t: t.name)
+
+
+#: link groups of the same two corridors joined to a same carriageway cluster up to this times ``cluster_distance_m``
+_SHARED_CARRIAGEWAY_FACTOR = 2.0
+
+#: how far (m) beyond its first and last junction a carriageway is kept for the self-check
+_CHECK_REACH_M = 1500.0
+
+#: parts of a network closer than this (m) are read together (snapping, opposite carriageways)
+_PART_GAP_M = 250.0
+
+
+def split_network(net: OsmNetwork, options: OsmOptions) -> list[OsmNetwork]:
+    """The network cut into places read independently: ways connected through shared
+    nodes, joined when their bounding boxes come within ``_PART_GAP_M`` (plus the snap
+    tolerance). A metro extract is read place by place, so the work grows with its size."""
+    ids = sorted(net.ways)
+    if len(ids) < 2:
+        return [net]
+    parent = list(range(len(ids)))
+
+    def find(k):
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    first_way: dict[int, int] = {}
+    for k, wid in enumerate(ids):
+        for n in net.ways[wid].nodes:
+            j = first_way.setdefault(n, k)
+            if j != k:
+                ra, rb = find(j), find(k)
+                if ra != rb:
+                    parent[max(ra, rb)] = min(ra, rb)
+    groups: dict[int, list[int]] = defaultdict(list)
+    for k in range(len(ids)):
+        groups[find(k)].append(k)
+    roots = sorted(groups)
+    boxes = np.full((len(roots), 4), np.nan)
+    for r, root in enumerate(roots):
+        pts = np.array([net.coords[n] for k in groups[root] for n in net.ways[ids[k]].nodes
+                        if n in net.coords]).reshape(-1, 2)
+        if len(pts):
+            boxes[r] = [pts[:, 0].min(), pts[:, 1].min(), pts[:, 0].max(), pts[:, 1].max()]
+    gap_deg = (_PART_GAP_M + options.snap_tolerance_m) / 111_000.0
+    lat = np.nan_to_num(np.abs(boxes[:, [0, 2]]).max(axis=1), nan=0.0)
+    gap_lon = gap_deg / np.maximum(np.cos(np.radians(np.minimum(lat, 89.0))), 1e-3)
+    merge = list(range(len(roots)))
+
+    def find_part(k):
+        while merge[k] != k:
+            merge[k] = merge[merge[k]]
+            k = merge[k]
+        return k
+
+    order = np.argsort(np.nan_to_num(boxes[:, 0], nan=1e9))
+    active: list[int] = []  # sweep along latitude: only boxes overlapping in latitude are compared
+    for r in order:
+        if np.isnan(boxes[r, 0]):
+            continue
+        active = [a for a in active if boxes[a, 2] + gap_deg >= boxes[r, 0]]
+        for a in active:
+            g = max(gap_lon[a], gap_lon[r])
+            if boxes[a, 1] - g <= boxes[r, 3] and boxes[r, 1] - g <= boxes[a, 3]:
+                ra, rb = find_part(a), find_part(r)
+                if ra != rb:
+                    merge[max(ra, rb)] = min(ra, rb)
+        active.append(int(r))
+    parts: dict[int, list[int]] = defaultdict(list)
+    for r, root in enumerate(roots):
+        parts[find_part(r)].extend(groups[root])
+    if len(parts) == 1:
+        return [net]
+    out = []
+    for key in sorted(parts):
+        way_ids = sorted(ids[k] for k in parts[key])
+        sub = OsmNetwork(source=net.source, ways={w: net.ways[w] for w in way_ids})
+        nodes = {n for w in way_ids for n in net.ways[w].nodes}
+        sub.coords = {n: net.coords[n] for n in sorted(nodes) if n in net.coords}
+        sub.elevation = {n: net.elevation[n] for n in sub.coords if n in net.elevation}
+        sub.ordinary = {n: net.ordinary[n] for n in sub.coords if n in net.ordinary}
+        out.append(sub)
+    return out
+
+
+def _build_part_safe(net: OsmNetwork, options: OsmOptions) -> tuple[list[Topology], TopologyError | None]:
+    try:
+        return _build_part(net, options), None
+    except TopologyError as exc:
+        return [], exc
+
+
+def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     nw = _Network(net, options)
     nw.add_ways()
     nw.snap_dangling_links()
     nw.reclassify_connectors()
+    nw.extend_cut_carriageways()
     if not options.keep_exits:
         nw.prune_links()
     b = _Builder(nw)
@@ -684,12 +998,22 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
         k = e[0] if e[0][0] not in _ROAD_KEYS else e[1]
         comp_edges[comp_of[k]].append(e)
 
+    corridor_sets = [{b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
+                     for ci in range(len(comps))]
+    point_sets: dict[int, np.ndarray] = {}
+    group_sets = [{k[1] for e in comp_edges[ci] for k in e[:2] if k[0] == "road"} for ci in range(len(comps))]
+
+    def groups(ci):
+        return group_sets[ci]
+
     def corridors(ci):
-        return {b.groups[k[1]].corridor for e in comp_edges[ci] for k in e[:2] if k[0] == "road"}
+        return corridor_sets[ci]
 
     def points(ci):
-        return np.array([nw.xy[e[3]] for e in comp_edges[ci]] +
-                        [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
+        if ci not in point_sets:
+            point_sets[ci] = np.array([nw.xy[e[3]] for e in comp_edges[ci]] +
+                                      [p for k in comps[ci] if k[0] == "ramp" for p in b.st[k[1]].xy])
+        return point_sets[ci]
 
     multi = [ci for ci in range(len(comps)) if len(corridors(ci)) >= 2]
     attached: dict[int, list[int]] = defaultdict(list)
@@ -716,25 +1040,28 @@ def build_topologies(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
                 continue
             pi, pj = points(ci), points(cj)
             d = np.sqrt(((pi[:, None, :] - pj[None, :, :]) ** 2).sum(-1)).min()
-            if d <= options.cluster_distance_m:
+            # joined to a same carriageway (a split or merge without links
+            # a little away from the flyovers): one interchange a little further apart
+            shared = bool(groups(ci) & groups(cj))
+            if d <= options.cluster_distance_m * (_SHARED_CARRIAGEWAY_FACTOR if shared else 1.0):
                 close.append((ci, cj))
     clusters = _components(multi, close)
     out, failed = [], []
     for cl in clusters:
         cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
         try:
-            out.append(_topology(nw, b, cl_edges))
+            t = _topology(nw, b, cl_edges)
+            t.attrs["osm"]["self_check"] = self_check(t)
+            for row in t.attrs["osm"]["self_check"]:
+                log.warning("%s: %s: self-check %s: %s", nw.src, t.name, row["check"], row["detail"])
+            out.append(t)
         except TopologyError as exc:
             exc.located(nw.src)
             failed.append(exc)
             log.warning("interchange rejected: %s", exc.one_line())
-    if failed and not out:  # nothing usable: the file is rejected with the first reason
+    if failed and not out:
         raise failed[0]
-    names = Counter(t.name for t in out)
-    for t in out:
-        if names[t.name] > 1:
-            log.warning("%s: duplicate interchange name %s", nw.src, t.name)
-    return sorted(out, key=lambda t: t.name)
+    return out
 
 
 def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
@@ -775,7 +1102,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             k += 1
     road_id: dict[int, str] = {}
     for g in road_gids:
-        base = exp_of[g] + bearing_letter(heading[g])
+        base = exp_of[g] + bearing_letter(heading[g] * np.array([nw.mirror, 1.0]))
         rid, k = base, 2
         while rid in road_id.values():
             rid, k = f"{base}{k}", k + 1
@@ -799,7 +1126,10 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             lo, hi = window[road[1]]
             pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
         conns.append(Connection(nid(src), nid(dst), label, pos))
-    roads, node_attrs, lines = [], {}, {}
+    roads, node_attrs, lines, carriageways = [], {}, {}, {}
+    junction_xy = np.array([nw.xy[n] for n in junction_nodes])
+    ring_centre = junction_xy.mean(axis=0)
+    ring_radius = float(np.hypot(*(junction_xy - ring_centre).T).max()) + RING_MARGIN_M + 50.0
     for g in road_gids:
         grp = b.groups[g]
         lo, hi = window[g]
@@ -810,6 +1140,12 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         roads.append(Road(road_id[g], exp_of[g], lanes_of(ways_in)))
         node_attrs[road_id[g]] = {"osm_ways": " ".join(map(str, ways_in)), "ref": grp.corridor}
         lines[road_id[g]] = grp.xy[inside].tolist()
+        s_j = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
+        reach = (cum >= min(s_j) - _CHECK_REACH_M) & (cum <= max(s_j) + _CHECK_REACH_M)
+        # only what the self-check's ring can meet: points inside it and their neighbours
+        near = np.hypot(*(grp.xy - ring_centre).T) <= ring_radius
+        near = near | np.concatenate([near[1:], [False]]) | np.concatenate([[False], near[:-1]])
+        carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach & near]).round(1).tolist()
     for n in local_nodes:
         tags = net.ordinary.get(n, {})
         label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
@@ -841,8 +1177,11 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         lines[rid] = st.xy.tolist()
     osm = {
         "origin": (nw.proj.lat0, nw.proj.lon0),
-        "lines": lines,
-        "junctions": [(nw.xy[n].tolist(), nid(src), nid(dst), label.value) for src, dst, label, n in edges],
+        "lines": {k: nw.unmirrored(v).tolist() for k, v in lines.items()},
+        "junctions": [(nw.unmirrored(nw.xy[n])[0].tolist(), nid(src), nid(dst), label.value)
+                      for src, dst, label, n in edges],
+        "driving_side": nw.side,
+        "carriageways": carriageways,
         "quirks": list(nw.quirks),
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }

@@ -1,4 +1,4 @@
-"""``flyover osm FILE.osm``: the interchanges an OpenStreetMap extract holds."""
+"""``flyover osm FILE.osm[.pbf|.gz|.bz2]``: the interchanges an OpenStreetMap extract holds."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ __all__ = ["register"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("osm", help="list the motorway interchanges of OpenStreetMap extracts")
-    p.add_argument("files", nargs="+", metavar="FILE.osm", help="OSM XML extract(s)")
+    p.add_argument("files", nargs="+", metavar="FILE.osm", help="OSM extract(s): .osm, .osm.pbf, .osm.gz, "
+                   ".osm.bz2")
     p.add_argument("--config", metavar="YAML", help="config file whose osm: section to use "
                    "(default: config/config.yaml if present)")
     p.add_argument("--plot", metavar="DIR", help="also draw each interchange's OSM geometry to "
@@ -51,7 +52,7 @@ def _osm(args) -> int:
                    "n_ramps": t.n_ramps, "shape": t.shape, "class_id": cid,
                    "catalog_design": names.get(cid), "roads": list(t.roads),
                    "expressways": {k: list(v) for k, v in t.expressways.items()},
-                   "notes": t.attrs["osm"]["quirks"]}
+                   "notes": t.attrs["osm"]["quirks"], "self_check": t.attrs["osm"].get("self_check", [])}
             if args.plot:
                 try:
                     png = child_path(Path(args.plot), t.name, ".png", source=str(path))
@@ -71,6 +72,8 @@ def _osm(args) -> int:
             print(f"{r['source_file']}: {r['interchange']}: {r['n_roads']} roads, {r['n_ramps']} ramps, "
                   f"{r['shape']}, {r['class_id']} = {design}; expressways {exps}"
                   + (f"; picture {r['picture']}" if "picture" in r else ""))
+            for row in r["self_check"]:
+                print(f"    self-check {row['check']}: {row['detail']}")
             if args.notes:
                 for note in r["notes"]:
                     print(f"    note: {note}")

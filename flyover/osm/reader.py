@@ -1,10 +1,19 @@
-"""Streaming reader of OpenStreetMap XML: the motorway network only.
+"""Reader of OpenStreetMap extracts (``.osm``, ``.osm.gz``, ``.osm.bz2``, ``.osm.pbf``): the motorway network.
 
-The file is parsed twice with :func:`xml.etree.ElementTree.iterparse`, each
-element cleared once read, so memory grows with the motorway network, not
-with the file: pass 1 keeps the ``highway=motorway|motorway_link`` ways (and
-``trunk|trunk_link`` when asked), pass 2 the coordinates of their nodes and
-which of those nodes ordinary roads touch (exits to ordinary roads).
+One reader for every format, through pyosmium (the Python binding of
+libosmium, ``osmium`` on PyPI), which decodes XML, compressed XML and PBF in
+C++. The file is read twice, with filters run inside libosmium so that only
+what is needed reaches Python:
+
+1. ways tagged ``highway=motorway|motorway_link`` (and ``trunk|trunk_link``
+   when asked), with their nodes' coordinates from libosmium's node-location
+   index (``flex_mem``: dense or sparse as the ids are); no node object
+   reaches Python;
+2. the ``highway=*`` ways (an ordinary road touching the network is an exit)
+   and the nodes tagged ``ele`` or ``highway``.
+
+Memory: the node-location index (8–16 bytes per node of the file) and the
+motorway network.
 """
 
 from __future__ import annotations
@@ -13,15 +22,23 @@ import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from xml.etree.ElementTree import ParseError, iterparse
 
 from flyover.errors import InputFormatError
 
-__all__ = ["OsmWay", "OsmNetwork", "read_motorway_network", "normalize_ref"]
+__all__ = ["OsmWay", "OsmNetwork", "read_motorway_network", "normalize_ref", "OSM_SUFFIXES", "is_osm_file"]
 
 log = logging.getLogger(__name__)
 
-_KEEP_TAGS = ("highway", "ref", "oneway", "lanes", "name", "layer", "bridge", "tunnel", "incline")
+_KEEP_TAGS = ("highway", "ref", "oneway", "lanes", "name", "layer", "bridge", "tunnel", "incline",
+              "driving_side")
+
+#: the file name endings read as OpenStreetMap extracts (longest first)
+OSM_SUFFIXES = (".osm.pbf", ".osm.bz2", ".osm.gz", ".pbf", ".osm")
+
+
+def is_osm_file(path: str | os.PathLike) -> bool:
+    """Whether ``path``'s name ends like an OpenStreetMap extract (case ignored)."""
+    return str(path).lower().endswith(OSM_SUFFIXES)
 
 
 @dataclass(frozen=True)
@@ -68,91 +85,116 @@ def normalize_ref(ref: str | None) -> str | None:
     return ";".join(parts) or None
 
 
-def _elements(path: str):
-    """Yield the top-level elements (node, way, relation) and free them once used."""
-    context = iterparse(path, events=("start", "end"))
-    root = None
-    depth = 0
-    for event, el in context:
-        if event == "start":
-            if root is None:
-                root = el
-            depth += 1
-            continue
-        depth -= 1
-        if depth == 1:
-            yield el
-            el.clear()
-            root.clear()
+def _format_error(src: str, exc: Exception) -> InputFormatError:
+    """libosmium's error as one line naming the file and what kind of file it was read as."""
+    msg = " ".join(str(exc).split())[:300]
+    low = src.lower()
+    if "could not detect file format" in msg.lower():
+        return InputFormatError(f"not an OSM extract (expected one of {', '.join(OSM_SUFFIXES)})", source=src)
+    if msg.lower().startswith("open failed"):
+        return InputFormatError("cannot read: " + msg.split(":")[-1].strip(), source=src)
+    kind = "OSM PBF" if low.endswith(".pbf") else "OSM XML"
+    if "eof" in msg.lower() or "truncated" in msg.lower():
+        return InputFormatError(f"malformed {kind} (file cut short?): {msg}", source=src)
+    return InputFormatError(f"malformed {kind}: {msg}", source=src)
 
 
-def read_motorway_network(path: str | os.PathLike, highways: frozenset[str]) -> OsmNetwork:
+def _ele(value: str | None) -> float | None:
+    try:
+        ele = float(value.split()[0].rstrip("m"))
+    except (ValueError, AttributeError, IndexError):
+        return None
+    return ele if ele == ele and abs(ele) < 1e5 else None
+
+
+def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
+                          bbox: tuple[float, float, float, float] | None = None) -> OsmNetwork:
     """Read the ways whose ``highway`` is in ``highways`` and their nodes.
+
+    Parameters
+    ----------
+    path
+        ``.osm``, ``.osm.gz``, ``.osm.bz2`` or ``.osm.pbf`` (the format is taken from the name).
+    highways
+        The ``highway`` values of the network.
+    bbox
+        ``(min_lon, min_lat, max_lon, max_lat)``: keep only network ways with a
+        node inside (each kept whole), as extracts are cut.
 
     Raises
     ------
     InputFormatError
-        The file is not OSM XML (names the file and the line where parsing failed).
+        The file is not an OSM extract, is malformed or cut short (names the file
+        and what libosmium reported); nothing is returned then.
     """
+    import osmium  # noqa: PLC0415 (optional stage: the import is light, libosmium is not)
+
     src = str(path)
-    if src.endswith(".pbf"):
-        raise InputFormatError("OSM PBF is not supported: convert it with 'osmium cat FILE -o FILE.osm'",
-                               source=src)
     net = OsmNetwork(source=src)
-    bad_coords: list[int] = []
+    if not Path(src).is_file():
+        raise InputFormatError("cannot read: no such file", source=src)
+    if not is_osm_file(src):
+        raise InputFormatError(f"not an OSM extract name (expected one of {', '.join(OSM_SUFFIXES)})",
+                               source=src)
+    ways: dict[int, OsmWay] = {}
+    coords: dict[int, tuple[float, float]] = {}
     try:
-        saw_osm = False
-        for el in _elements(src):
-            saw_osm = True
-            if el.tag != "way":
-                continue
-            tags = {t.get("k"): t.get("v") for t in el if t.tag == "tag"}
-            if tags.get("highway") not in highways:
-                continue
-            wid = int(el.get("id"))
-            nodes = tuple(int(n.get("ref")) for n in el if n.tag == "nd")
+        # 1. the network's ways (tag filter in libosmium) with their nodes' locations
+        #    (node-location index in libosmium: no node reaches Python)
+        flt = osmium.filter.TagFilter(*(("highway", h) for h in sorted(highways)))
+        proc = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY).with_locations("flex_mem") \
+            .with_filter(osmium.filter.EntityFilter(osmium.osm.WAY)).with_filter(flt)
+        for w in proc:
+            nodes, pts = [], []
+            for nd in w.nodes:
+                nodes.append(nd.ref)
+                loc = nd.location
+                if loc.valid():
+                    pts.append((nd.ref, loc.lat, loc.lon))
             if len(nodes) < 2:
-                log.warning("%s: way %d: fewer than two nodes, ignored", src, wid)
+                log.warning("%s: way %d: fewer than two nodes, ignored", src, w.id)
                 continue
-            kept = tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags)
-            net.ways[wid] = OsmWay(wid, nodes, kept)
-        needed = {n for w in net.ways.values() for n in w.nodes}
-        for el in _elements(src):
-            if el.tag == "node":
-                nid = int(el.get("id"))
-                if nid in needed:
-                    lat, lon = float(el.get("lat")), float(el.get("lon"))
-                    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):  # also nan
-                        bad_coords.append(nid)
-                        continue
-                    net.coords[nid] = (lat, lon)
-                    for t in el:
-                        if t.tag == "tag" and t.get("k") == "ele":
-                            try:
-                                net.elevation[nid] = float(t.get("v").split()[0].rstrip("m"))
-                            except (ValueError, AttributeError, IndexError):
-                                log.info("%s: node %d: unreadable ele=%r", src, nid, t.get("v"))
-            elif el.tag == "way":
-                tags = {t.get("k"): t.get("v") for t in el if t.tag == "tag"}
-                hw = tags.get("highway")
+            if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
+                                             for _, lat, lon in pts):
+                continue
+            tags = {t.k: t.v for t in w.tags}
+            ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
+            for ref, lat, lon in pts:
+                coords[ref] = (lat, lon)
+        needed = {n for w in ways.values() for n in w.nodes}
+        # 2. ordinary roads touching the network (exits) and the ele of network nodes
+        if ways:
+            second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
+                .with_filter(osmium.filter.KeyFilter("highway", "ele"))
+            for o in second:
+                if o.is_node():
+                    if "ele" in o.tags and o.id in needed:
+                        ele = _ele(o.tags["ele"])
+                        if ele is None:
+                            log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
+                        else:
+                            net.elevation[o.id] = ele
+                    continue
+                hw = o.tags.get("highway")
                 if hw is None or hw in highways:
                     continue
-                for n in el:
-                    if n.tag == "nd" and int(n.get("ref")) in needed:
-                        net.ordinary.setdefault(int(n.get("ref")), {
-                            k: tags[k] for k in ("highway", "ref", "name") if k in tags})
-    except (ParseError, LookupError) as exc:  # LookupError: a declared encoding Python does not know
-        raise InputFormatError(f"malformed OSM XML: {str(exc)[:300]}", source=src) from None
-    except (TypeError, ValueError) as exc:
-        raise InputFormatError(f"malformed OSM element: {exc}", source=src) from None
-    if not saw_osm:
-        raise InputFormatError("empty OSM file", source=src)
-    if bad_coords:
-        log.warning("%s: %d way node(s) with lat/lon off the globe (e.g. node %d): treated as missing",
-                    src, len(bad_coords), bad_coords[0])
-    missing = needed - net.coords.keys()
+                info = None
+                for nd in o.nodes:
+                    ref = nd.ref
+                    if ref in needed and ref not in net.ordinary:
+                        if info is None:
+                            info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
+                        net.ordinary[ref] = info
+    except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
+        # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
+        raise _format_error(src, exc) from None
+    missing = [(wid, n) for wid, w in ways.items() for n in w.nodes if n not in coords]
+    missing.sort()
+    net.ways, net.coords = ways, coords
     if missing:
-        log.warning("%s: %d way node(s) missing from the file (e.g. node %d); their ways are cut there",
-                    src, len(missing), min(missing))
+        w0, n0 = missing[0]
+        log.warning("%s: way %d refers to node %d, missing from the file or off the globe "
+                    "(%d such reference(s)): the way is cut there", src, w0, n0, len(missing))
+
     log.info("%s: %d network ways, %d nodes", Path(src).name, len(net.ways), len(net.coords))
     return net

@@ -31,8 +31,9 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
     ``osm_options`` (a :class:`flyover.osm.OsmOptions`) controls how OSM
     extracts are read. Also writes ``{outdir}/index.json``: the interchanges written (name,
     source file, GraphML path; for a name made from data, ``name_from``: what it was
-    made from, e.g. OSM refs → name parts) and the rejections (source file, element,
-    reason). Interchange names must be unique within a city, ignoring case (file
+    made from, e.g. OSM refs → name parts), the rejections (source file, element,
+    reason) and the notes (an OSM interchange whose self-check disagrees: source file,
+    interchange, check, detail, preview picture). Interchange names must be unique within a city, ignoring case (file
     systems that ignore case would merge them); a later duplicate is rejected.
     ``city`` and every interchange name must be safe names
     (:mod:`flyover.topology.names`): nothing is written outside ``outdir``.
@@ -50,7 +51,7 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
     check_name(city, what="city name")
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    interchanges, rejected, taken = [], [], set()
+    interchanges, rejected, notes, taken = [], [], [], set()
     for path in sorted(map(str, files)):
         try:
             topologies = read_topologies(path, osm_options=osm_options)
@@ -80,8 +81,12 @@ def import_city(city: str, files: Iterable[str | os.PathLike], outdir: str | os.
             if t.attrs.get("name_from"):
                 item["name_from"] = t.attrs["name_from"]
             interchanges.append(item)
+            # an OSM interchange's self-check disagreements are the city's notes
+            for row in (t.attrs.get("osm") or {}).get("self_check", []):
+                notes.append({"city": city, "source_file": path, "interchange": t.name, **row,
+                              "preview": str(child_path(outdir, t.name, ".png", source=path))})
             log.info("%s: %s", path, t.summary())
-    index = {"city": city, "interchanges": interchanges, "rejected": rejected}
+    index = {"city": city, "interchanges": interchanges, "rejected": rejected, "notes": notes}
     atomic_write(outdir / CITY_INDEX, json.dumps(index, indent=2, sort_keys=True).encode())
     return index
 

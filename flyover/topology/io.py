@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 #: file suffixes a city folder may hold, mapped to their reader's name
-TOPOLOGY_SUFFIXES = (".graphml", ".yaml", ".yml", ".osm")
+TOPOLOGY_SUFFIXES = (".graphml", ".yaml", ".yml", ".osm", ".pbf", ".gz", ".bz2")
 
 _SIDE_WORDS = {"right": "right", "left": "left", "straight": "middle", "middle": "middle"}
 
@@ -419,8 +419,8 @@ def read_topologies(path: str | os.PathLike, *, osm_options: Any = None) -> list
     """Read every interchange in ``path``, whatever its format (by suffix).
 
     GraphML and YAML files hold one interchange; an OpenStreetMap extract
-    (``.osm``) may hold several (needs :mod:`flyover.osm`; ``osm_options`` is
-    its :class:`flyover.osm.OsmOptions`, default from ``config/config.yaml``).
+    (``.osm``, ``.osm.pbf``, ``.osm.gz``, ``.osm.bz2``) may hold several (needs
+    :mod:`flyover.osm`; ``osm_options`` is its :class:`flyover.osm.OsmOptions`, default from ``config/config.yaml``).
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -429,7 +429,7 @@ def read_topologies(path: str | os.PathLike, *, osm_options: Any = None) -> list
             return [read_graphml(p)]
         if suffix in (".yaml", ".yml"):
             return [read_yaml_spec(p)]
-        if suffix == ".osm":
+        if p.name.lower().endswith((".osm", ".osm.pbf", ".osm.gz", ".osm.bz2", ".pbf")):
             try:
                 from flyover.osm import read_osm_topologies  # noqa: PLC0415 (optional stage)
             except ImportError:

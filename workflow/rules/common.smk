@@ -12,7 +12,7 @@ from flyover.topology.io import TOPOLOGY_SUFFIXES
 validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
-TOPOLOGY_VERSION = 3  # 2: representative.graphml per class; 3: safe names, FLYOVER ids
+TOPOLOGY_VERSION = 4  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 4  # 4: plan.png in 40 m chunks, fixed layout
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
@@ -47,6 +47,15 @@ def city_files(wildcards):
         for p in root.iterdir()
         if p.is_file() and p.suffix.lower() in TOPOLOGY_SUFFIXES
     )
+
+
+def city_osm_options(wildcards):
+    """The osm: section for one city: its own bbox only (another city's is no rerun trigger)."""
+    opts = {k: v for k, v in config["osm"].items() if k != "city_bbox"}
+    box = config["osm"].get("city_bbox", {}).get(wildcards.city)
+    if box is not None:
+        opts["bbox"] = box
+    return opts
 
 
 def class_manifest():

@@ -14,7 +14,7 @@ rule import_city:
     params:
         version=TOPOLOGY_VERSION,
         city="{city}",
-        osm=config["osm"],
+        osm=city_osm_options,
     script:
         "../scripts/import_city.py"
 
