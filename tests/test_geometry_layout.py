@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 from flyover.geometry.bezier import sample_spline
-from flyover.geometry.layout import (
-    GeometryError, LayoutSettings, RampFeatures, _stations, build_interchange,
-)
+from flyover.geometry.fitted import stations as _stations
+from flyover.geometry.layout import GeometryError, LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.check import ramp_crossings, same_level_conflicts
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.profile import evaluate_polys
@@ -149,7 +148,7 @@ def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
 
 
 def test_stack_level_plan_puts_left_turns_over_the_roads_on_two_flyover_levels():
-    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState as _Builder  # noqa: PLC0415
 
     t = catalog_topologies()["stack4"]
     st = LayoutSettings()
@@ -167,7 +166,7 @@ def test_stack_level_plan_puts_left_turns_over_the_roads_on_two_flyover_levels()
 
 
 def test_cloverleaf_has_no_level_plan():
-    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState as _Builder  # noqa: PLC0415
 
     t = catalog_topologies()["cloverleaf"]
     b = _Builder(t, {r: 2 for r in t.roads}, {r: RampFeatures(150.0, 4.0) for r in t.ramps},
@@ -197,7 +196,7 @@ def test_loops_on_collector_distributor_roads_turn_270_degrees_right(cloverleaf_
 
 
 def test_loop_movement_comes_from_the_roads_not_the_wiggling_parents():
-    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState as _Builder  # noqa: PLC0415
 
     t = catalog_topologies()["cloverleaf_cd"]
     feats = {r: RampFeatures(30.0 if r.startswith("c") else 150.0, 4.0) for r in t.ramps}
@@ -224,7 +223,7 @@ def test_cloverleaf_with_cd_roads_builds_every_ramp_within_targets(cloverleaf_cd
 
 
 def _builder(name, radius=150.0, slope=4.0, lanes=3):
-    from flyover.geometry.layout import _Builder  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState as _Builder  # noqa: PLC0415
 
     t = catalog_topologies()[name]
     feats = {r: RampFeatures(radius, slope) for r in t.ramps}
@@ -244,7 +243,7 @@ def test_t_level_plan_puts_the_two_crossing_left_turns_one_level_apart(name):
 
 def test_trumpet_loop_is_a_loop_and_the_other_left_turn_needs_no_second_level():
     b, feats = _builder("trumpet")
-    assert b._is_loop("loop")
+    assert b.moves.is_loop("loop")
     assert b.plan == {"rL": b.st.levels_m[1]}  # over the through road only
     assert b.spec("loop", feats["loop"]).turn_rad == pytest.approx(-1.5 * np.pi)
 
@@ -301,7 +300,7 @@ def test_outer_connector_attaches_where_an_arc_at_its_radius_clears_the_loop():
     rail = b.spec("oB2", feats["oB2"]).end  # joins A1 after lA1 leaves it
     r, rad = b.roads["A1"], 280.0
     d = np.array([math.cos(r.heading), math.sin(r.heading)])
-    rel = b.rails["lA1"]["centre"] - np.array(r.origin)
+    rel = b.fitted.stations["lA1"]["centre"] - np.array(r.origin)
     t, y = rel @ d, rel @ np.array([-d[1], d[0]])
     edge = -r.lanes * b.st.lane_width_m
     # an arc of the connector's radius tangent to A1's right edge at the window's start
@@ -330,7 +329,7 @@ def test_cloverleaf_outer_connectors_go_round_their_loops_not_over_them(monkeypa
     at heights that let them cross (both climb between the two levels); a real one goes
     round the loop. Fitted with the loop as an obstacle at every height, none crosses its
     loop in plan; with that rule off, the same feature set has connectors over loops."""
-    from flyover.geometry import layout  # noqa: PLC0415
+    from flyover.geometry import rails  # noqa: PLC0415
 
     t = catalog_topologies()["cloverleaf"]
     slopes = {"lA1": 2, "lA2": 3, "lB1": 1, "lB2": 5, "oA1": 4, "oA2": 1, "oB1": 4, "oB2": 3}
@@ -347,7 +346,7 @@ def test_cloverleaf_outer_connectors_go_round_their_loops_not_over_them(monkeypa
     assert crossings(ic) == set()
     assert not {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)
                 if c.ramp.startswith("l") and c.other.startswith("o")}
-    monkeypatch.setattr(layout._Builder, "round_loops", lambda self, ramp: frozenset())
+    monkeypatch.setattr(rails.AttachmentWindows, "round_loops", lambda self, ramp: frozenset())
     over = build_interchange(t, lanes, feats, seed=430509475)
     assert crossings(over)
     # the check module finds the same bridges (independently: segment pairs via a k-d tree)
@@ -405,14 +404,14 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     """Rip-up and reroute: on these targets (a catalog feature set) the directional T's
     right turn rR, fitted after the left turn rL, still meets it; rL is fitted again
     around rR and every ramp then meets its targets with no same-level conflict."""
-    from flyover.geometry import layout  # noqa: PLC0415
+    from flyover.geometry import build  # noqa: PLC0415
 
     t = catalog_topologies()["directional_t"]
     lanes = {"A1": 4, "A2": 5, "B1": 5, "B2": 4}
     feats = {"rA1": RampFeatures(math.inf, 3.0), "rA2": RampFeatures(100.0, 4.0),
              "rL": RampFeatures(60.0, 3.0), "rR": RampFeatures(280.0, 2.0)}
     calls = []
-    real = layout._reroute
+    real = build._reroute
 
     def spy(b, ramp, fit, seed, outcomes):
         before = dict(b.fits)
@@ -420,32 +419,32 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
         calls.append((ramp, fit.conflicts, sorted(k for k in before if b.fits[k] is not before[k])))
         return out
 
-    monkeypatch.setattr(layout, "_reroute", spy)
+    monkeypatch.setattr(build, "_reroute", spy)
     ic = build_interchange(t, lanes, feats, seed=3967713561)
     assert calls == [("rR", calls[0][1], ["rL"])] and calls[0][1] > 0
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     # without it rR keeps its conflict with rL, and says so
-    monkeypatch.setattr(layout, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
+    monkeypatch.setattr(build, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
     ic = build_interchange(t, lanes, feats, seed=3967713561, settings=LayoutSettings(rebuilds=0))
     r_r = next(o for o in ic.outcomes if o.ramp == "rR")
     assert r_r.fit.conflicts > 0 and "with rL" in r_r.infeasible
 
 
 def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_then_seeds(monkeypatch):
-    from flyover.geometry import layout  # noqa: PLC0415
+    from flyover.geometry import build  # noqa: PLC0415
 
     t = catalog_topologies()["parclo_adjacent"]
     feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
     feats["oA1"] = RampFeatures(5000.0, 4.0)  # cannot be met: every restart is used
     seen = []
-    real = layout.fit_ramp
+    real = build.fit_ramp
 
     def spy(spec, obstacles, settings, seed=0):
         if spec.id == "oA1":
             seen.append((spec.pieces, any(spec.leads()), seed))
         return real(spec, obstacles, settings, seed=seed)
 
-    monkeypatch.setattr(layout, "fit_ramp", spy)
+    monkeypatch.setattr(build, "fit_ramp", spy)
     build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
                       settings=LayoutSettings(restarts=4, max_resamples=0))
     n = seen[0][0]
@@ -531,7 +530,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     """J1's r2 joins r3 on r3's left; r3 joins R4 from R4's right and runs along its edge,
     so along that stretch r3's left is R4. A catalog feature set (sample 18) in which r2
     used to squeeze in there: r2 now joins r3 where r2's lane is clear of R4, first try."""
-    from flyover.geometry import layout  # noqa: PLC0415
+    from flyover.geometry import rails  # noqa: PLC0415
 
     t = catalog_topologies()["j1"]
     feats = {"r1": RampFeatures(210.0, 3.0), "r2": RampFeatures(math.inf, 1.0),
@@ -543,7 +542,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     assert not same_level_conflicts(ic.geometry)
     # where r2 joins, r3's left side has room for r2's lane beside R4's band
     r3, r4 = by["r3"].fit, next(r for r in ic.geometry.roads if r.id == "R4")
-    stn = layout._stations(r3, 400)
+    stn = _stations(r3, 400)
     k = int(np.searchsorted(stn["s"], by["r2"].fit.end_s))
     h = stn["heading"][k]
     left = np.array([-math.sin(h), math.cos(h)])
@@ -552,7 +551,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
         lat = (stn["xy"][k] + w * left - np.array(r4.start)) @ np.array([-d[1], d[0]])
         assert not (-r4.lanes * st.lane_width_m <= lat <= 0.0)
     # without the room rule, the same build squeezes r2 in beside R4
-    monkeypatch.setattr(layout._Builder, "_room_beside",
+    monkeypatch.setattr(rails.AttachmentWindows, "room_beside",
                         lambda self, parent, off, width, lo, hi: (lo, hi))
     squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072466, settings=st)
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}

@@ -34,7 +34,7 @@ frozenset()
 
 from __future__ import annotations
 
-from flyover.geometry.layout import _ends
+from flyover.geometry.chains import ends as _ends
 from flyover.sampling.model import Feature
 from flyover.topology.model import Kind, Topology
 
