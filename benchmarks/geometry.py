@@ -7,6 +7,16 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
 
 * per class: ramps, within tolerance on the first try, resampled, within
   tolerance at the end, recorded infeasible, with a same-level conflict;
+* per design: ramp length median / p95 / max, footprint (bounding box of the
+  ramps' lane centres), and the ramps' radius and slope **re-measured from the
+  exported .xodr** (read back with :mod:`flyover.opendrive.reader`; lane centre
+  width / 2 right of the ramp's reference line, as the fit measures it, on all its
+  roads, the junction tapers included;
+  radius by three-point circles 4 m apart, :func:`flyover.osm.geom.min_radius`;
+  slope as dz/ds of the elevation every metre) against the targets of
+  geometry.parquet: within 5 % of the radius target (an ``inf`` target: no
+  tighter than ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
+  with) and 0.2 pp of the slope target;
 * median / p95 seconds per interchange and per ramp (vectorised DE);
 * the same ramps re-fitted alone with our DE, scipy's vectorised DE and
   scipy's plain (one call per candidate) DE on the same objective and with
@@ -21,6 +31,8 @@ the whole catalog city as the workflow samples it, one process per core:
 from __future__ import annotations
 
 import argparse
+import io
+import math
 import multiprocessing
 import os
 import time
@@ -33,6 +45,10 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from flyover.config import load_config  # noqa: E402
+from flyover.geometry.bezier import sample_spline  # noqa: E402
+from flyover.opendrive.reader import read_xodr  # noqa: E402
+from flyover.opendrive.writer import xodr_bytes  # noqa: E402
+from flyover.osm.geom import min_radius  # noqa: E402
 from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: E402
 from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
@@ -48,15 +64,18 @@ def drawn_feature_sets(topology, profile, n, seed):
     """``n`` feature sets drawn from the domains; features geometry fixes up front
     (slope 0 on level ramps, :func:`flyover.geometry.feasibility.fixed_features`) are
     set, not drawn (the same draws as without them, so other designs are unchanged)."""
-    from flyover.geometry.feasibility import fixed_features
+    from flyover.geometry.feasibility import fixed_features, turning_ramps
     from flyover.sampling.model import Feature
 
     fixed = fixed_features(topology)
+    turning = turning_ramps(topology)  # inf is forbidden on them (sampling's extra=)
+    finite = [v for v in profile["ramp"]["radius_m"] if math.isfinite(float(v))]
     rng = np.random.default_rng(seed)
     out = {}
     for k in range(n):
         lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
-        ramps = {r: RampFeatures(float(rng.choice(profile["ramp"]["radius_m"])),
+        ramps = {r: RampFeatures(float(rng.choice(finite if r in turning
+                                                  else profile["ramp"]["radius_m"])),
                                  float(fixed.get((r, Feature.SLOPE_PCT),
                                                  rng.choice(profile["ramp"]["slope_pct"]))))
                  for r in topology.ramps}
@@ -83,8 +102,60 @@ def _build(job: tuple[str, int]) -> tuple:
         write_sample(ic, out / "geometry.json", out / "geometry.parquet")
     dense = same_level_conflicts(ic.geometry)  # the independent checks, not timed
     bridges = len(ramp_crossings(ic.geometry))
-    return (name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes], dense, rebuilt,
-            bridges)
+    rows = geometry_rows(ic)
+    xodr = remeasure(ic.geometry)
+    for r in rows:
+        r["xodr_radius_m"], r["xodr_slope_pct"] = xodr.get(r["ramp"], (math.nan, math.nan))
+    return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
+            bridges, footprint(ic))
+
+
+def footprint(ic) -> tuple[float, float]:
+    """Bounding box (m × m) of the ramps' lane centres."""
+    pts = np.concatenate([sample_spline(o.fit.ctrl, 40).xy.reshape(-1, 2) for o in ic.outcomes])
+    span = pts.max(0) - pts.min(0)
+    return float(span[0]), float(span[1])
+
+
+def _lane_offset(road, s: np.ndarray) -> np.ndarray:
+    if not road.lane_offset:
+        return np.zeros_like(s)
+    starts = np.array([c.s for c in road.lane_offset])
+    idx = np.clip(np.searchsorted(starts, s, side="right") - 1, 0, len(starts) - 1)
+    out = np.empty_like(s)
+    for i in np.unique(idx):
+        out[idx == i] = road.lane_offset[i](s[idx == i])
+    return out
+
+
+def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float]]:
+    """Ramp id → (min radius of its driving lanes' centre line, max slope %), read back
+    from the exported .xodr (the ramp's own roads, not the junction tapers)."""
+    net = read_xodr(io.BytesIO(xodr_bytes(geometry)))
+    out: dict[str, tuple[float, float]] = {}
+    widths = {r.id: r.lanes * geometry.ramp_lane_width_m for r in geometry.ramps}
+    for road in net.roads.values():
+        if road.name not in widths or (road.junction != "-1" and not tapers) or road.length < 1.0:
+            continue
+        s = np.linspace(0.0, road.length, max(3, int(road.length / 0.5) + 1))
+        x, y, z, h = road.reference(s)
+        # the fit's lane centre: width / 2 right of the reference line (plus any lane offset)
+        t = _lane_offset(road, s) - widths[road.name] / 2
+        xy = np.stack([x - np.sin(h) * t, y + np.cos(h) * t], -1)
+        rad = min_radius(xy, step_m=2.0, chord_steps=2)
+        grade = np.abs(np.diff(z) / np.diff(s)) * 100.0
+        slope = float(grade.max()) if len(grade) else 0.0
+        r0, g0 = out.get(road.name, (math.inf, 0.0))
+        out[road.name] = (min(r0, rad), max(g0, slope))
+    return out
+
+
+def agrees(row: dict, inf_reference_m: float) -> tuple[bool, bool]:
+    """Whether the re-measured radius / slope agree with the row's targets."""
+    t, r = row["target_radius_m"], row["xodr_radius_m"]
+    radius = r >= 0.95 * inf_reference_m if math.isinf(t) else abs(r - t) <= 0.05 * t
+    slope = abs(row["xodr_slope_pct"] - row["target_slope_pct"]) <= 0.2
+    return bool(radius), bool(slope)
 
 
 def main() -> None:
@@ -98,6 +169,8 @@ def main() -> None:
                          "--samples 0")
     ap.add_argument("--keep", type=Path, metavar="DIR",
                     help="write DIR/{class_id}/{sample}/geometry.json (as the workflow does)")
+    ap.add_argument("--show-misses", type=int, default=0,
+                    help="print this many ramps whose re-measured radius or slope misses")
     ap.add_argument("--jobs", type=int, default=1,
                     help="worker processes (one per core; each interchange is timed in its "
                          "worker)")
@@ -128,7 +201,9 @@ def main() -> None:
     dense_bad: dict[str, int] = {}
     rebuilt: dict[str, int] = {}
     crossings: dict[str, list[int]] = {}
-    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges in done:
+    boxes: dict[str, list[float]] = {}
+    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges, box in done:
+        boxes.setdefault(name, []).append(box[0] * box[1] / 1e6)
         crossings.setdefault(name, []).append(bridges)
         if again:
             rebuilt[name] = rebuilt.get(name, 0) + 1
@@ -176,6 +251,27 @@ def main() -> None:
     for name, ls in sorted(lengths.items()):
         print(f"  {name:<17} median {np.median(ls):6.0f}  p95 {np.percentile(ls, 95):6.0f}  "
               f"max {max(ls):6.0f}  (n={len(ls)})")
+    print("footprint (bounding box of the ramps, km²):")
+    for name, bs in sorted(boxes.items()):
+        print(f"  {name:<17} median {np.median(bs):6.2f}  max {max(bs):6.2f}  (n={len(bs)})")
+    print("re-measured from the .xodr: ramps within 5 % of the radius target / 0.2 pp of the "
+          "slope target / both (of geometry.parquet's targets)")
+    by_name: dict[str, list] = {}
+    for r in rows:
+        by_name.setdefault(names[r["class_id"]], []).append(
+            agrees(r, settings.fit.inf_reference_m))
+    every = [a for v in by_name.values() for a in v]
+    for name, ag in sorted(by_name.items()) + [("total", every)]:
+        n = len(ag)
+        print(f"  {name:<17} radius {100 * sum(a for a, _ in ag) / n:5.1f} %  slope "
+              f"{100 * sum(b for _, b in ag) / n:5.1f} %  both {100 * sum(a and b for a, b in ag) / n:5.1f} %"
+              f"  (n={n})")
+    bad = [r for r in rows if not all(agrees(r, settings.fit.inf_reference_m))]
+    for r in bad[:args.show_misses]:
+        print(f"    miss {names[r['class_id']]} {r['sample']} {r['ramp']}: radius "
+              f"{r['target_radius_m']:g} -> {r['xodr_radius_m']:.1f} (fit {r['min_radius_m']:.1f}),"
+              f" slope {r['target_slope_pct']:g} -> {r['xodr_slope_pct']:.2f} "
+              f"(fit {r['max_slope_pct']:.2f}) {r['infeasible'][:60]}")
     print("ramps crossing ramps in plan (a bridge each; flyover.geometry.check.ramp_crossings) "
           "per interchange:")
     for name, xs in sorted(crossings.items()):
