@@ -23,7 +23,9 @@ attachments) and the ramp's targets.
   left where r3 runs along R4's edge) attaches only where its lane is clear of
   that road.
 * A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
-  crossing.
+  crossing; any other ramp within what it needs (``bound``, from
+  :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
+  that a long detour is never cheaper for the search than a conflict.
 """
 
 from __future__ import annotations
@@ -49,17 +51,19 @@ class AttachmentWindows:
         self.roads, self.g, self.topo = moves.roads, moves.g, moves.topo
 
     def rail(self, ramp: str, feat: RampFeatures, end, is_start: bool, loop: bool,
-             width: float, extra: float = 0.0) -> Rail:
-        """The rail of one end (``end`` = ``(parent, label)``) of ``ramp``."""
+             width: float, extra: float = 0.0, bound: float | None = None) -> Rail:
+        """The rail of one end (``end`` = ``(parent, label)``) of ``ramp``; on a road, no
+        farther than ``bound`` beyond the room it keeps from the crossing."""
         node, label = end
         if node in self.roads:
             pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
-            return self.road_rail(node, ramp, feat, label, is_start, loop, pos, width, extra)
+            return self.road_rail(node, ramp, feat, label, is_start, loop, pos, width, extra,
+                                  bound)
         return self.ramp_rail(node, ramp, label, is_start, width)
 
     def road_rail(self, road: str, ramp: str, feat: RampFeatures, label: Label,
                   is_start: bool, loop: bool, pos: float | None, width: float,
-                  extra: float = 0.0) -> Rail:
+                  extra: float = 0.0, bound: float | None = None) -> Rail:
         r, st, moves = self.roads[road], self.st, self.moves
         if label in (Label.OUT_M, Label.IN_M):
             off = 0.0
@@ -81,6 +85,8 @@ class AttachmentWindows:
             reach = max(st.reach_m, tz + st.gap_m)
             if moves.is_stub(ramp):  # a stub attaches just beyond the room it leaves
                 reach = tz + st.stub_window_m
+            elif bound is not None:  # no farther out than the ramp needs
+                reach = max(tz + st.gap_m, min(reach, tz + bound))
             lo, hi = (-reach, -tz) if before else (tz, reach)
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
             if pos is not None:

@@ -49,6 +49,15 @@ class LayoutSettings:
     #: whole-interchange rebuilds with other DE seeds while a ramp still meets something
     rebuilds: int = 3
     inf_min_radius_m: float = 30.0
+    #: a ramp attaches to a road no farther beyond the room it keeps from the crossing
+    #: than (1 + length_margin) × what it needs (:meth:`RampSpecs.need_m`: its turn at its
+    #: radius or its climb at its slope, and its two tapers); ``None``: anywhere within
+    #: ``reach_m`` (ramps then wander: a long detour costs the search less than a conflict)
+    length_margin: float | None = 0.5
+    #: the longest ramp a feature set may ask for (m; real ramps: median ~570 m, longest
+    #: ~1.6 km in ../shared/osm): a (radius, slope) whose turn or climb needs more is no
+    #: combination sampling offers that ramp (:func:`flyover.geometry.feasibility.forbidden_features`)
+    max_ramp_length_m: float = 1500.0
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod

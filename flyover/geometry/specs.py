@@ -107,12 +107,28 @@ class RampSpecs:
             extra = max(extra, self.levels.kids_room(outs, self._end_z(start), turning=False))
             extra_b = max(extra_b, self.levels.kids_room(ins, self._end_z(end), turning=False))
         w = self.windows
-        a = w.rail(ramp, feat, start, True, loop, width, extra) if start else None
-        b = w.rail(ramp, feat, end, False, loop, width, extra_b) if end else None
+        bound = None
+        if st.length_margin is not None and start is not None and end is not None \
+                and not self.moves.same_road(ramp):
+            bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end)
+        a = w.rail(ramp, feat, start, True, loop, width, extra, bound) if start else None
+        b = w.rail(ramp, feat, end, False, loop, width, extra_b, bound) if end else None
         crest = plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat),
                         inf_floor_m=float(st.inf_min_radius_m))
+
+    def need_m(self, turn: float, feat: RampFeatures, start, end) -> float:
+        """What a ramp between two attached ends needs beyond the room it keeps from the
+        crossing (which holds a flyover's climb): its turn at its target radius (an
+        ``inf`` target: at ``inf_reference_m``) or the climb between its ends at its
+        slope, whichever is longer, and a taper (``gap_m``) at each end."""
+        st = self.st
+        r = feat.radius_m if np.isfinite(feat.radius_m) else st.fit.inf_reference_m
+        g = max(feat.slope_pct, 0.5) / 100.0
+        climb = float(climb_distance(self._end_z(end) - self._end_z(start), g,
+                                     st.fit.transition_m))
+        return max(abs(turn) * r, climb) + 2.0 * st.gap_m
 
     def _leads(self, start, end, crest, free, feat: RampFeatures) -> tuple:
         """Longest straight leads of a ramp that climbs: each attached end may run
