@@ -80,17 +80,19 @@ def _collector(b: LayoutState, ramp: str, spec: RampSpec) -> RampFit | None:
     return collector_fit(spec, kids, b.obstacles(), b.st)
 
 
-def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int) -> tuple[RampFit, int, float]:
+def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
+                     keep_out: frozenset[str] = frozenset()) -> tuple[RampFit, int, float]:
     """Fit; while the ramp meets something at its level, lift its crest one level.
 
     The first fits have no leads; a ramp that still misses its targets is fitted
     again (``restarts`` times in all) with its straight leads
     (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
     cubic cannot bend evenly enough for its radius), then with one more piece
-    but no leads, then with other seeds."""
+    but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
+    in plan at all (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`)."""
     st = b.st
     evals, secs = 0, 0.0
-    obst = b.obstacles()
+    obst = b.obstacles(keep_out)
     tried = []
     more = replace(spec, pieces=spec.pieces + 1)
     plain_more = replace(more, lead_m=(None, None))
@@ -208,6 +210,11 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
                     break
+            else:  # then lifted a level and with the restarts of any other ramp
+                kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops)
+                evals, secs = evals + e2, secs + s2
+                if kept.ok and kept.conflicts == 0:
+                    fit = kept
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2

@@ -67,9 +67,15 @@ class FittedRamps:
         heights = np.arange(-step, st.levels_m[-1] + 2 * step, step)
         for rid in sorted(keep_out & set(self.stations)):
             s = self.stations[rid]
-            n = len(s["centre_z"])
+            # not where it leaves or joins its roads (within keep_out_trim_m of its ends):
+            # there it runs beside the road the other ramp also runs beside (its copy at its
+            # own height still counts)
+            c = s["centre"]
+            along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(c, axis=0).T))])
+            inner = (along > st.keep_out_trim_m) & (along < along[-1] - st.keep_out_trim_m)
+            n = int(inner.sum())
             for h in heights:
-                pts.append(s["centre"])
+                pts.append(c[inner])
                 zs.append(np.full(n, h))
                 hw.append(np.full(n, self.width[rid] / 2))
                 owner += [rid] * n

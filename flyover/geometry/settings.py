@@ -58,6 +58,9 @@ class LayoutSettings:
     #: ~1.6 km in ../shared/osm): a (radius, slope) whose turn or climb needs more is no
     #: combination sampling offers that ramp (:func:`flyover.geometry.feasibility.forbidden_features`)
     max_ramp_length_m: float = 1500.0
+    #: a loop an outer connector goes round is an obstacle at every height except within
+    #: this far (m) of its ends, where both run beside their shared road
+    keep_out_trim_m: float = 40.0
     fit: FitSettings = field(default_factory=FitSettings)
 
     @classmethod
