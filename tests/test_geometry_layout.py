@@ -531,15 +531,16 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
 @pytest.mark.slow
 def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_room(monkeypatch):
     """J1's r2 joins r3 on r3's left; r3 joins R4 from R4's right and runs along its edge,
-    so along that stretch r3's left is R4. A catalog feature set (sample 18) in which r2
-    used to squeeze in there: r2 now joins r3 where r2's lane is clear of R4, first try."""
+    so along that stretch r3's left is R4. A catalog feature set (sample 18, r2 at 280 m
+    since inf is no radius of a turning ramp) in which r2 used to squeeze in there: r2 now
+    joins r3 where r2's lane is clear of R4, first try."""
     from flyover.geometry import rails  # noqa: PLC0415
 
     t = catalog_topologies()["j1"]
-    feats = {"r1": RampFeatures(210.0, 3.0), "r2": RampFeatures(math.inf, 1.0),
+    feats = {"r1": RampFeatures(210.0, 3.0), "r2": RampFeatures(280.0, 1.0),
              "r3": RampFeatures(40.0, 4.0), "r4": RampFeatures(100.0, 2.0)}
     st = LayoutSettings(rebuilds=0)
-    ic = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072466, settings=st)
+    ic = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072467, settings=st)
     by = {o.ramp: o for o in ic.outcomes}
     assert all(o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     assert not same_level_conflicts(ic.geometry)
@@ -556,7 +557,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     # without the room rule, the same build squeezes r2 in beside R4
     monkeypatch.setattr(rails.AttachmentWindows, "room_beside",
                         lambda self, parent, off, width, lo, hi: (lo, hi))
-    squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072466, settings=st)
+    squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072467, settings=st)
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
 
 
