@@ -7,6 +7,17 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
 
 * per class: ramps, within tolerance on the first try, resampled, within
   tolerance at the end, recorded infeasible, with a same-level conflict;
+* per design: ramp length median / p95 / max, footprint (bounding box of the
+  ramps' lane centres), and the ramps' radius and slope **re-measured from the
+  exported .xodr** (read back with :mod:`flyover.opendrive.reader`; lane centre
+  width / 2 right of the ramp's reference line, as the fit measures it, on all its
+  roads, the junction tapers included;
+  radius by three-point circles spanning 10 m (the arc a radius must be held over,
+  :data:`flyover.geometry._kernels.HOLD_M`), :func:`flyover.osm.geom.min_radius`;
+  slope as dz/ds of the elevation every metre) against the targets of
+  geometry.parquet: within 5 % of the radius target (an ``inf`` target: no
+  tighter than ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
+  with) and 0.2 pp of the slope target;
 * median / p95 seconds per interchange and per ramp (vectorised DE);
 * the same ramps re-fitted alone with our DE, scipy's vectorised DE and
   scipy's plain (one call per candidate) DE on the same objective and with
@@ -21,6 +32,8 @@ the whole catalog city as the workflow samples it, one process per core:
 from __future__ import annotations
 
 import argparse
+import io
+import math
 import multiprocessing
 import os
 import time
@@ -33,6 +46,12 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from flyover.config import load_config  # noqa: E402
+from flyover.geometry._kernels import HOLD_M  # noqa: E402
+from flyover.geometry.bezier import sample_spline  # noqa: E402
+from flyover.geometry.profile import climb_distance, evaluate_polys  # noqa: E402
+from flyover.opendrive.reader import read_xodr  # noqa: E402
+from flyover.opendrive.writer import xodr_bytes  # noqa: E402
+from flyover.osm.geom import min_radius  # noqa: E402
 from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: E402
 from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
@@ -48,15 +67,18 @@ def drawn_feature_sets(topology, profile, n, seed):
     """``n`` feature sets drawn from the domains; features geometry fixes up front
     (slope 0 on level ramps, :func:`flyover.geometry.feasibility.fixed_features`) are
     set, not drawn (the same draws as without them, so other designs are unchanged)."""
-    from flyover.geometry.feasibility import fixed_features
+    from flyover.geometry.feasibility import fixed_features, turning_ramps
     from flyover.sampling.model import Feature
 
     fixed = fixed_features(topology)
+    turning = turning_ramps(topology)  # inf is forbidden on them (sampling's extra=)
+    finite = [v for v in profile["ramp"]["radius_m"] if math.isfinite(float(v))]
     rng = np.random.default_rng(seed)
     out = {}
     for k in range(n):
         lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
-        ramps = {r: RampFeatures(float(rng.choice(profile["ramp"]["radius_m"])),
+        ramps = {r: RampFeatures(float(rng.choice(finite if r in turning
+                                                  else profile["ramp"]["radius_m"])),
                                  float(fixed.get((r, Feature.SLOPE_PCT),
                                                  rng.choice(profile["ramp"]["slope_pct"]))))
                  for r in topology.ramps}
@@ -82,9 +104,141 @@ def _build(job: tuple[str, int]) -> tuple:
         out = keep / cid / str(sample)
         write_sample(ic, out / "geometry.json", out / "geometry.parquet")
     dense = same_level_conflicts(ic.geometry)  # the independent checks, not timed
-    bridges = len(ramp_crossings(ic.geometry))
-    return (name, sample, secs, geometry_rows(ic), [o.fit for o in ic.outcomes], dense, rebuilt,
-            bridges)
+    crossing = ramp_crossings(ic.geometry)
+    bridges = len(crossing)
+    crossed = {frozenset((c.ramp, c.other)) for c in crossing}
+    rounds = [frozenset(p) not in crossed for p in round_pairs(topo, settings)]
+    rows = geometry_rows(ic)
+    stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
+    for r in rows:
+        r["stretch"] = stretch[r["ramp"]]
+    xodr = remeasure(ic.geometry)
+    for r in rows:
+        r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"] = \
+            xodr.get(r["ramp"], (math.nan, math.nan, math.nan))
+    return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
+            bridges, footprint(ic), grade_jumps(ic.geometry), rounds)
+
+
+def round_pairs(topo, settings) -> list[tuple[str, str]]:
+    """(outer connector, loop) pairs: a cloverleaf's or parclo's outer connector and the
+    loop joining the same two roads the other way round, on the road they share
+    (:meth:`flyover.geometry.chains.Movements.goes_round_loop`)."""
+    from flyover.geometry.chains import Movements, ends  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    moves = Movements(topo, layout_roads(topo, {}, settings))
+    out = []
+    for ramp in topo.ramps:
+        for other in topo.ramps:
+            shared = {e[0] for e in ends(topo, ramp) if e} & {e[0] for e in ends(topo, other) if e}
+            if any(road in moves.roads and moves.goes_round_loop(ramp, other, road)
+                   for road in shared):
+                out.append((ramp, other))
+    return out
+
+
+def grade_jumps(geometry) -> list[float]:
+    """For every end of a ramp attached to another ramp: |the child's grade there − the
+    parent's grade at the attachment| (percentage points)."""
+    ramps = {r.id: r for r in geometry.ramps}
+    out = []
+    for r in geometry.ramps:
+        length = sum(p.length_m for p in r.plan)
+        for att, s_child in ((r.start, 0.0), (r.end, length)):
+            parent = ramps.get(att.parent)
+            if parent is None:
+                continue
+            _, g_child = evaluate_polys(r.elevation, np.array([s_child]))
+            _, g_parent = evaluate_polys(parent.elevation, np.array([att.s_m]))
+            out.append(100.0 * abs(float(g_child[0]) - float(g_parent[0])))
+    return out
+
+
+def need_m(fit, settings) -> float:
+    """What a fitted ramp needed: the longer of its turn at its target radius (``inf``:
+    ``inf_reference_m``) and its climb from its start to its crest and down to its end at
+    its slope target, and a taper (``gap_m``) at each end (as
+    :meth:`flyover.geometry.specs.RampSpecs.need_m` and the feature domains count it)."""
+    sp = fit.spec
+    r = sp.target_radius_m if math.isfinite(sp.target_radius_m) else \
+        settings.fit.inf_reference_m
+    g = max(sp.target_slope_pct, 0.5) / 100.0
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    top = max(fit.z_crest, za, zb)
+    tr = settings.fit.transition_m
+    climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
+    return max(abs(sp.turn_rad) * r, climb) + 2.0 * settings.gap_m
+
+
+def footprint(ic) -> tuple[float, float]:
+    """Bounding box (m × m) of the ramps' lane centres."""
+    pts = np.concatenate([sample_spline(o.fit.ctrl, 40).xy.reshape(-1, 2) for o in ic.outcomes])
+    span = pts.max(0) - pts.min(0)
+    return float(span[0]), float(span[1])
+
+
+def _lane_offset(road, s: np.ndarray) -> np.ndarray:
+    if not road.lane_offset:
+        return np.zeros_like(s)
+    starts = np.array([c.s for c in road.lane_offset])
+    idx = np.clip(np.searchsorted(starts, s, side="right") - 1, 0, len(starts) - 1)
+    out = np.empty_like(s)
+    for i in np.unique(idx):
+        out[idx == i] = road.lane_offset[i](s[idx == i])
+    return out
+
+
+def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float]]:
+    """Ramp id → (min radius of its lane centre line, max slope %, min radius of the line
+    width / 2 right of its reference line), read back from the exported .xodr (all the
+    ramp's roads; ``tapers=False``: not its junction connecting roads). The first radius
+    follows the exporter's laneOffset (where a merging or diverging lane shifts the
+    ramp's own lane sideways), the last is the fitted curve's definition."""
+    net = read_xodr(io.BytesIO(xodr_bytes(geometry)))
+    out: dict[str, tuple[float, float]] = {}
+    widths = {r.id: r.lanes * geometry.ramp_lane_width_m for r in geometry.ramps}
+    for road in net.roads.values():
+        if road.name not in widths or (road.junction != "-1" and not tapers) or road.length < 1.0:
+            continue
+        s = np.linspace(0.0, road.length, max(3, int(road.length / 0.5) + 1))
+        x, y, z, h = road.reference(s)
+        # the fit's lane centre: width / 2 right of the reference line (plus any lane offset)
+        rads = []
+        for t in (_lane_offset(road, s) - widths[road.name] / 2,
+                  np.full_like(s, -widths[road.name] / 2)):
+            xy = np.stack([x - np.sin(h) * t, y + np.cos(h) * t], -1)
+            rads.append(min_radius(xy, step_m=HOLD_M / 2, chord_steps=1))
+        grade = np.abs(np.diff(z) / np.diff(s)) * 100.0
+        slope = float(grade.max()) if len(grade) else 0.0
+        r0, g0, q0 = out.get(road.name, (math.inf, 0.0, math.inf))
+        out[road.name] = (min(r0, rads[0]), max(g0, slope), min(q0, rads[1]))
+    return out
+
+
+def agrees(row: dict, inf_reference_m: float, key: str = "xodr_radius_m") -> tuple[bool, bool]:
+    """Whether the re-measured radius (``key``) / slope agree with the row's targets."""
+    t, r = row["target_radius_m"], row[key]
+    radius = r >= 0.95 * inf_reference_m if math.isinf(t) else abs(r - t) <= 0.05 * t
+    slope = abs(row["xodr_slope_pct"] - row["target_slope_pct"]) <= 0.2
+    return bool(radius), bool(slope)
+
+
+def topologies(osm: list[Path] | None) -> dict:
+    """The catalog designs, or every interchange :mod:`flyover.osm` finds in ``osm`` files
+    (named ``file-stem:k``; catalog classes among them keep the design's name)."""
+    if not osm:
+        return catalog_topologies()
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    design = {class_id_of(t): n for n, t in catalog_topologies().items()}
+    out = {}
+    for path in osm:
+        for k, topo in enumerate(read_osm_topologies(path)):
+            if topo.ramps:
+                name = design.get(class_id_of(topo), f"{path.stem[:14]}:{k}")
+                out[name] = topo
+    return out
 
 
 def main() -> None:
@@ -98,6 +252,11 @@ def main() -> None:
                          "--samples 0")
     ap.add_argument("--keep", type=Path, metavar="DIR",
                     help="write DIR/{class_id}/{sample}/geometry.json (as the workflow does)")
+    ap.add_argument("--osm", nargs="*", type=Path, metavar="FILE",
+                    help="build the interchanges of these .osm extracts instead of the catalog "
+                         "(feature sets drawn from the domains)")
+    ap.add_argument("--show-misses", type=int, default=0,
+                    help="print this many ramps whose re-measured radius or slope misses")
     ap.add_argument("--jobs", type=int, default=1,
                     help="worker processes (one per core; each interchange is timed in its "
                          "worker)")
@@ -106,13 +265,17 @@ def main() -> None:
     settings = LayoutSettings.from_config(cfg["geometry"])
     profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
     seed = int(cfg["seed"])
-    rows, per_ic, names, fits = [], [], {}, []
+    rows, per_ic, names, fits, real = [], [], {}, [], {}
     jobs = []
-    for name, topo in catalog_topologies().items():
+    for name, topo in topologies(args.osm).items():
         if args.designs and name not in args.designs:
             continue
         cid = class_id_of(topo)
+        if cid in names:  # the same class found again (another extract): built once
+            continue
         names[cid] = name
+        real[name] = [float(topo.graph.nodes[r]["length_m"]) for r in topo.ramps
+                      if topo.graph.nodes[r].get("length_m")]
         if args.from_results:
             sets = read_feature_sets(f"results/features/{cid}.parquet")
         else:
@@ -128,7 +291,13 @@ def main() -> None:
     dense_bad: dict[str, int] = {}
     rebuilt: dict[str, int] = {}
     crossings: dict[str, list[int]] = {}
-    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges in done:
+    boxes: dict[str, list[float]] = {}
+    jumps: dict[str, list[float]] = {}
+    rounded: dict[str, list[bool]] = {}
+    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges, box, jump, rnd in done:
+        rounded.setdefault(name, []).extend(rnd)
+        jumps.setdefault(name, []).extend(jump)
+        boxes.setdefault(name, []).append(box[0] * box[1] / 1e6)
         crossings.setdefault(name, []).append(bridges)
         if again:
             rebuilt[name] = rebuilt.get(name, 0) + 1
@@ -175,7 +344,57 @@ def main() -> None:
     print("ramp length (m):")
     for name, ls in sorted(lengths.items()):
         print(f"  {name:<17} median {np.median(ls):6.0f}  p95 {np.percentile(ls, 95):6.0f}  "
-              f"max {max(ls):6.0f}  (n={len(ls)})")
+              f"max {max(ls):6.0f}  (n={len(ls)})", end="")
+        if real.get(name):  # the real interchange's ramps (OSM length_m)
+            rl = real[name]
+            print(f"   real: median {np.median(rl):6.0f}  p95 {np.percentile(rl, 95):6.0f}  "
+                  f"max {max(rl):6.0f}  (n={len(rl)})", end="")
+        print()
+    print("ramp length / what it needs (its turn at its radius or its climb at its slope, "
+          "and two tapers; benchmarks.geometry.need_m):")
+    ratios: dict[str, list[float]] = {}
+    for r in rows:
+        ratios.setdefault(names[r["class_id"]], []).append(r["stretch"])
+    for name, xs in sorted(ratios.items()) + [("total", [r["stretch"] for r in rows])]:
+        print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
+              f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)} of {len(xs)}")
+    print("footprint (bounding box of the ramps, km²):")
+    for name, bs in sorted(boxes.items()):
+        print(f"  {name:<17} median {np.median(bs):6.2f}  max {max(bs):6.2f}  (n={len(bs)})")
+    print("re-measured from the .xodr: ramps within 5 % of the radius target / 0.2 pp of the "
+          "slope target / both (of geometry.parquet's targets)")
+    by_name: dict[str, list] = {}
+    for r in rows:
+        by_name.setdefault(names[r["class_id"]], []).append(
+            agrees(r, settings.fit.inf_reference_m))
+    ref: dict[str, list] = {}
+    for r in rows:
+        ref.setdefault(names[r["class_id"]], []).append(
+            agrees(r, settings.fit.inf_reference_m, "xodr_ref_radius_m")[0])
+    every = [a for v in by_name.values() for a in v]
+    for name, ag in sorted(by_name.items()) + [("total", every)]:
+        n = len(ag)
+        rf = ref.get(name, [x for v in ref.values() for x in v])
+        print(f"  {name:<17} radius {100 * sum(a for a, _ in ag) / n:5.1f} %  slope "
+              f"{100 * sum(b for _, b in ag) / n:5.1f} %  both {100 * sum(a and b for a, b in ag) / n:5.1f} %"
+              f"  (n={n});  radius without the exporter's laneOffset {100 * sum(rf) / n:5.1f} %")
+    bad = [r for r in rows if not all(agrees(r, settings.fit.inf_reference_m, "xodr_ref_radius_m"))]
+    for r in bad[:args.show_misses]:
+        print(f"    miss {names[r['class_id']]} {r['sample']} {r['ramp']}: radius "
+              f"{r['target_radius_m']:g} -> {r['xodr_ref_radius_m']:.1f} "
+              f"(laneOffset {r['xodr_radius_m']:.1f}, fit {r['min_radius_m']:.1f}),"
+              f" slope {r['target_slope_pct']:g} -> {r['xodr_slope_pct']:.2f} "
+              f"(fit {r['max_slope_pct']:.2f}) {r['infeasible'][:60]}")
+    print("outer connectors that go round their loop (not over or under it, "
+          "flyover.geometry.check.ramp_crossings):")
+    for name, rs in sorted(rounded.items()):
+        if rs:
+            print(f"  {name:<17} {100 * sum(rs) / len(rs):5.1f} %  (n={len(rs)})")
+    print("grade jump where a ramp leaves / joins a ramp (pp; > 0.5 pp counted):")
+    for name, js in sorted(jumps.items()):
+        if js:
+            print(f"  {name:<17} max {max(js):5.2f}  over 0.5 pp: {sum(j > 0.5 for j in js)} of "
+                  f"{len(js)}")
     print("ramps crossing ramps in plan (a bridge each; flyover.geometry.check.ramp_crossings) "
           "per interchange:")
     for name, xs in sorted(crossings.items()):

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import io
 import json
+import math
+from dataclasses import replace
 
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -14,7 +16,9 @@ import pytest
 
 from flyover.cli import main
 from flyover.errors import ConfigError
-from flyover.geometry.feasibility import fixed_features, level_ramps
+from flyover.geometry.feasibility import (
+    fixed_features, forbidden_features, level_ramps, turning_ramps,
+)
 from flyover.geometry.layout import LayoutSettings, RampFeatures
 from flyover.geometry.tables import build_sample, domain_resampler
 from flyover.sampling.model import ElementCondition, Feature, ForbidRule, default_profile, feature_model
@@ -163,3 +167,53 @@ def test_a_cloverleaf_cd_feature_set_builds_its_cd_roads_level_and_ok(cd_samplin
         assert o.fit.spec.target_slope_pct == 0.0
         assert o.fit.max_slope_pct == pytest.approx(0.0, abs=1e-9)
         assert o.fit.ok and o.first_try_ok and o.infeasible == ""
+
+
+# -- ramps that must turn: no inf radius -------------------------------------------------
+
+
+def test_ramps_that_must_turn_are_every_ramp_but_stubs_cd_roads_and_straight_ones():
+    topos = catalog_topologies()
+    stack = topos["stack4"]
+    assert sorted(set(stack.ramps) - turning_ramps(stack)) == \
+        ["eA1", "eA2", "eB1", "eB2", "mA1", "mA2", "mB1", "mB2"]  # the stubs
+    assert turning_ramps(topos["cloverleaf_cd"]) == \
+        frozenset(topos["cloverleaf_cd"].ramps) - CD_ROADS
+    assert turning_ramps(topos["trumpet"]) == frozenset(topos["trumpet"].ramps)
+
+
+def test_inf_is_forbidden_on_turning_ramps_and_the_rest_is_fully_covered(cloverleaf_cd):
+    profile = default_profile()
+    extra = forbidden_features(cloverleaf_cd, profile)
+    s = sample_topology(cloverleaf_cd, profile, t=2, seed=11,
+                        fixed=fixed_features(cloverleaf_cd), extra=extra)
+    rows = [r for r in s.feature_rows() if r["kind"] == "ramp"]
+    turning = turning_ramps(cloverleaf_cd)
+    assert not [r for r in rows if r["element"] in turning and r["radius_m"] == math.inf]
+    # every other radius still occurs on every turning ramp, and the C-D roads keep inf
+    for ramp in turning:
+        assert {r["radius_m"] for r in rows if r["element"] == ramp} == \
+            set(profile.domain(Kind.RAMP)[Feature.RADIUS_M]) - {math.inf}
+    assert any(r["element"] in CD_ROADS and r["radius_m"] == math.inf for r in rows)
+    model = s.model
+    covered, total = independent_coverage(s.array.rows, model.levels, 2, cells(model.forbidden))
+    assert covered == total > 0
+
+
+def test_a_profile_without_inf_forbids_nothing(cloverleaf_cd):
+    p = default_profile()
+    domains = tuple((k, tuple((f, tuple(v for v in vs if v != math.inf)) for f, vs in fs))
+                    for k, fs in p.domains)
+    assert forbidden_features(cloverleaf_cd, replace(p, domains=domains)) == ()
+    assert len(forbidden_features(cloverleaf_cd, p)) == len(turning_ramps(cloverleaf_cd))
+
+
+def test_resampling_keeps_a_turning_ramp_finite():
+    inf = float("inf")
+    sets = {0: ({}, {"t": RampFeatures(100.0, 3.0), "s": RampFeatures(inf, 3.0)}),
+            1: ({}, {"t": RampFeatures(30.0, 4.0), "s": RampFeatures(40.0, 5.0)})}
+    draw = domain_resampler(sets, seed=1)
+    assert draw.finite == frozenset({"t"})
+    assert all(draw("t", k).radius_m != inf for k in range(1, 40))
+    assert all(draw.clearing("t", k).radius_m != inf for k in range(1, 40))
+    assert inf in {draw("s", k).radius_m for k in range(1, 40)}

@@ -51,7 +51,9 @@ def test_every_class_gets_feature_sets_and_a_complete_coverage_row(built):
         "class_id", "t", "n_params", "rows", "tuples_total", "tuples_covered", "lower_bound"]
     for row in coverage:
         assert row["t"] == 2 and row["tuples_covered"] == row["tuples_total"]
-        assert row["rows"] == row["lower_bound"] == 64
+        # inf is forbidden on every ramp of J1 and the trumpet (they all turn): 7 x 7 radii
+        # bound the arrays from below, within a few rows of it
+        assert row["lower_bound"] == 49 and 49 <= row["rows"] <= 53
         features = pq.read_table(built / "results" / "features" / f"{row['class_id']}.parquet")
         cls = next(c for c in classes if c["class_id"] == row["class_id"])
         assert features.num_rows == row["rows"] * (cls["n_roads"] + cls["n_ramps"])

@@ -60,6 +60,12 @@ def cell_heights(z_sorted: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, 
 
 #: longest spacing (m) of an obstacle ramp's lane-centre points (see layout's record)
 STEP_M = 2.0
+#: a ramp's radius is the tightest one it *holds* over this much arc (m): the mean
+#: curvature over every stretch this long (:func:`flyover.geometry.bezier.held_radius`).
+#: A curve that is tight only for a few metres (a cubic that meets a small radius
+#: target with a kink at its end and is gentle everywhere else) does not turn at that
+#: radius, and the exported road (tapers, lane sections) does not show it either.
+HOLD_M = 10.0
 #: an obstacle ramp's points are STEP_M apart, so a point within the two half widths of
 #: its lane centre line may lie up to STEP_M / 2 along it from the nearest one: the
 #: reach to a point is widened to cover that (never by more than 0.2 m for one lane)
@@ -291,7 +297,9 @@ def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover 
             if i > 0:
                 off += 0.5 * (speed + sp[j - 1]) / (m - 1)
             ss[j] = off
-    rmin = np.inf
+    g2 = 0.0
+    for k in range(1, n_p):
+        g2 += (kap[k * m] - kap[k * m - 1]) ** 2
     turn = 0.0
     mean = 0.0
     k2 = 0.0
@@ -299,17 +307,26 @@ def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover 
         kj = kap[j]
         mean += kj
         k2 += kj * kj
-        r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
-        if r < rmin:
-            rmin = r
         if j > 0:  # the heading change from the previous sample
             turn += _step_angle(tx[j - 1] * ty[j] - ty[j - 1] * tx[j],
                                 tx[j - 1] * tx[j] + ty[j - 1] * ty[j])
+        kap[j] = turn  # from here on: the heading change up to sample j
     mean /= n
     k2 /= n
-    g2 = 0.0
-    for k in range(1, n_p):
-        g2 += (kap[k * m] - kap[k * m - 1]) ** 2
+    # the tightest radius held over HOLD_M (or the whole ramp, if shorter): mean curvature
+    # between each sample and the first one at least HOLD_M further on
+    hold = min(HOLD_M, 0.999 * off)
+    rmin = np.inf
+    k = 0
+    for j in range(n):
+        while k < n and ss[k] - ss[j] < hold:
+            k += 1
+        if k == n:
+            break
+        kj = (kap[k] - kap[j]) / (ss[k] - ss[j])
+        r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
+        if r < rmin:
+            rmin = r
     return off, rmin, turn, max(k2 - mean * mean, 0.0), k2, g2
 
 

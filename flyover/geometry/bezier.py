@@ -109,6 +109,37 @@ def lane_radius(curvature: np.ndarray, width_m: float) -> np.ndarray:
     return np.where(k == 0.0, np.inf, r)
 
 
+def held_radius(samples: "SplineSamples", width_m: float, hold_m: float) -> float:
+    """The tightest lane-centre radius a sampled spline holds over ``hold_m`` of arc (or
+    its whole length, if shorter): from the mean curvature (heading change over arc
+    length of the reference line) between each sample and the first one ``hold_m``
+    further on, as :func:`lane_radius` offsets it. A circular arc of radius ``r`` gives
+    ``r``; a curve tight for less than ``hold_m`` gives more than its pointwise minimum.
+
+    >>> import numpy as np
+    >>> k = 4 / 3 * np.tan(np.pi / 8) * 100.0  # a cubic close to a quarter circle, r 100 m
+    >>> arc = sample_spline(np.array([[[0, 0], [k, 0], [100, 100 - k], [100, 100]]], float), 400)
+    >>> round(held_radius(arc, 0.0, 10.0), 1), round(float(lane_radius(arc.curvature, 0.0).min()), 1)
+    (99.2, 99.2)
+    >>> bent = sample_spline(np.array([[[0, 0], [5, 0], [400, 300], [1000, 300]]], float), 400)
+    >>> held_radius(bent, 0.0, 10.0) > 1.2 * float(lane_radius(bent.curvature, 0.0).min())
+    True
+    """
+    s = np.asarray(samples.s, float).ravel()
+    tang = np.asarray(samples.tangent, float).reshape(-1, 2)
+    head = np.unwrap(np.arctan2(tang[:, 1], tang[:, 0]))
+    hold = min(hold_m, 0.999 * float(s[-1] - s[0]))
+    if hold <= 0:
+        return float("inf")
+    k = np.searchsorted(s, s + hold, side="left")
+    ok = k < len(s)
+    j = np.flatnonzero(ok)
+    ds = s[k[ok]] - s[j]
+    kap = (head[k[ok]] - head[j]) / ds
+    r = lane_radius(kap, width_m)
+    return float(r.min()) if len(r) else float("inf")
+
+
 def lane_centre(xy: np.ndarray, tangent: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:
     """x and y ``(...)`` of the lane centre line, ``width_m/2`` right of a left-edge
     reference line sampled at ``xy`` with tangents ``tangent`` ``(..., 2)``."""

@@ -30,18 +30,54 @@ Examples
 frozenset()
 >>> fixed_features(catalog_topologies()["cloverleaf_cd"])[("cA1", Feature.SLOPE_PCT)]
 0.0
+
+**Ramps that must turn.** A ramp between two roads whose headings differ
+(a right turn, a left turn, a loop), or between two ramps whose chains connect
+such roads (a stack's right turn between two stubs), turns by that much
+whatever the sample. A radius target of ``inf`` means "no curve to match: the
+gentlest curve the ends allow"; on such a ramp that curve is a 140–250 m arc
+and the feature row would promise a straight ramp that is not built. So ``inf``
+is *forbidden* on every turning ramp (:func:`forbidden_features`, used as
+``extra=`` of :func:`flyover.sampling.sample.sample_topology`): the covering
+array covers only radii that are built. Stubs (one free end), collector-
+distributor roads and straight-on ramps keep ``inf``.
+
+**Ramps that would be too long.** A ramp between two roads turns by its movement
+at its radius and climbs from its start to its crest (a flyover's planned level,
+:mod:`flyover.geometry.levels`, else the higher end) and down to its end at its
+slope; what it needs is the longer of the two and a taper at each end
+(:func:`ramp_need_m`). A (radius, slope) whose need exceeds ``max_ramp_length_m``
+(1.5 km, about the longest real ramp of ../shared/osm) would be built only as a
+ramp longer than any real one: it is forbidden on that ramp too.
+
+>>> sorted(turning_ramps(catalog_topologies()["j1"]))
+['r1', 'r2', 'r3', 'r4']
+>>> sorted(turning_ramps(catalog_topologies()["turbine"]))[:3]
+['lA1', 'lA2', 'lB1']
 """
 
 from __future__ import annotations
 
-from flyover.geometry.layout import _ends
-from flyover.sampling.model import Feature
+import math
+from typing import Callable
+
+from flyover.geometry.chains import Movements
+from flyover.geometry.chains import ends as _ends
+from flyover.geometry.levels import LevelPlan
+from flyover.geometry.profile import climb_distance
+from flyover.geometry.roads import layout_roads
+from flyover.geometry.settings import LayoutSettings
+from flyover.sampling.model import ElementCondition, Feature, ForbidRule, Profile
 from flyover.topology.model import Kind, Topology
 
-__all__ = ["LEVEL_SLOPE_PCT", "level_ramps", "fixed_features"]
+__all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "fixed_features", "turning_ramps",
+           "forbidden_features", "ramp_need_m"]
 
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
+
+#: a ramp whose chain connects roads at least this far apart in heading (rad) must turn
+TURNING_RAD = 0.5
 
 
 def level_ramps(topology: Topology) -> frozenset[str]:
@@ -78,3 +114,81 @@ def fixed_features(topology: Topology) -> dict[tuple[str, Feature], float]:
         feature row instead of covering them.
     """
     return {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT for r in sorted(level_ramps(topology))}
+
+
+def turning_ramps(topology: Topology) -> frozenset[str]:
+    """The ramps that must turn: both ends attached, not a collector-distributor road,
+    and the roads their chain connects (:meth:`flyover.geometry.chains.Movements.movement`,
+    on the road layout of :mod:`flyover.geometry.roads`, which does not depend on the
+    sample) differ in heading by at least :data:`TURNING_RAD`, or a loop."""
+    roads = layout_roads(topology, {}, LayoutSettings())
+    moves = Movements(topology, roads)
+    out = set()
+    for ramp in topology.ramps:
+        if moves.is_stub(ramp) or moves.same_road(ramp):
+            continue
+        turn = moves.movement(ramp)
+        if moves.is_loop(ramp) or (turn is not None and abs(turn) >= TURNING_RAD):
+            out.add(ramp)
+    return frozenset(out)
+
+
+def ramp_need_m(topology: Topology, settings: LayoutSettings | None = None
+                ) -> dict[str, "Callable[[float, float], float]"]:
+    """Ramp → ``need(radius_m, slope_pct)``: the length (m) a ramp between two roads needs
+    for a radius and slope target: the longer of its turn (the movement at the radius,
+    ``inf_reference_m`` for ``inf``) and its climb (start → crest → end at the slope),
+    plus a taper (``gap_m``) at each end. Ramps attached to ramps are not in it (their
+    ends' heights follow from their parents' fits)."""
+    st = settings or LayoutSettings()
+    roads = layout_roads(topology, {}, st)
+    moves = Movements(topology, roads)
+    crests = LevelPlan(moves, {}, st).crests
+    out = {}
+    for ramp in topology.ramps:
+        start, end = _ends(topology, ramp)
+        if start is None or end is None or start[0] not in roads or end[0] not in roads \
+                or moves.same_road(ramp):
+            continue
+        za, zb = roads[start[0]].z, roads[end[0]].z
+        top = max(crests.get(ramp, -math.inf), za, zb)
+        turn = abs(moves.movement(ramp) or 0.0)
+        if moves.is_loop(ramp):
+            turn = 2 * math.pi - turn
+
+        def need(radius_m: float, slope_pct: float, up=top - za, down=top - zb,
+                 turn=turn) -> float:
+            g = max(slope_pct, 0.5) / 100.0
+            r = radius_m if math.isfinite(radius_m) else st.fit.inf_reference_m
+            climb = float(climb_distance(up, g, st.fit.transition_m)
+                          + climb_distance(down, g, st.fit.transition_m))
+            return max(turn * r, climb) + 2.0 * st.gap_m
+
+        out[ramp] = need
+    return out
+
+
+def forbidden_features(topology: Topology, profile: Profile | None = None,
+                       settings: LayoutSettings | None = None) -> tuple[ForbidRule, ...]:
+    """The feature values geometry cannot build on ``topology``: radius ``inf`` on every
+    turning ramp (:func:`turning_ramps`), and on a ramp between two roads every (radius,
+    slope) of ``profile``'s domain whose need (:func:`ramp_need_m`) exceeds
+    ``max_ramp_length_m`` (the ``settings``, else the defaults). For ``extra=`` of
+    :func:`flyover.sampling.sample.sample_topology`."""
+    st = settings or LayoutSettings()
+    domain = profile.domain(Kind.RAMP) if profile is not None else {}
+    radii = domain.get(Feature.RADIUS_M, (math.inf,))
+    rules = []
+    if any(math.isinf(v) for v in radii):
+        inf = ((Feature.RADIUS_M, frozenset({math.inf})),)
+        rules += [ForbidRule((ElementCondition(Kind.RAMP, inf, ramp),))
+                  for ramp in sorted(turning_ramps(topology))]
+    slopes = domain.get(Feature.SLOPE_PCT, ())
+    needs = ramp_need_m(topology, st)
+    for ramp in sorted(needs):
+        for r in radii:
+            long = frozenset(g for g in slopes if needs[ramp](r, g) > st.max_ramp_length_m)
+            if long:
+                cond = ((Feature.RADIUS_M, frozenset({r})), (Feature.SLOPE_PCT, long))
+                rules.append(ForbidRule((ElementCondition(Kind.RAMP, cond, ramp),)))
+    return tuple(rules)

@@ -29,7 +29,9 @@ scipy's ``differential_evolution`` on the same objective instead (the
 benchmark's reference).
 
 Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
-of the reference line). A target of ``inf`` on a ramp that has to turn means
+of the reference line), to the tightest radius it *holds* over
+:data:`flyover.geometry._kernels.HOLD_M` (10 m) of arc: a curve tight only for a
+few metres does not count as turning at that radius. A target of ``inf`` on a ramp that has to turn means
 *no radius to match*: the ramp is fitted as the gentlest curve its ends allow
 (curvature² is minimised instead of matching a radius), and its radius counts
 as within tolerance when it is no tighter than :attr:`RampSpec.inf_floor_m`
@@ -48,7 +50,7 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from flyover.geometry import _kernels
-from flyover.geometry.bezier import heading_vec, lane_centre, lane_radius, sample_spline
+from flyover.geometry.bezier import heading_vec, held_radius, lane_centre, sample_spline
 from flyover.geometry.profile import elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
@@ -562,7 +564,7 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
     length, lane-centre minimum radius, grade line and its maximum slope, conflicts."""
     dense = sample_spline(ctrl, 400)
     length = float(dense.length)
-    rmin = float(lane_radius(dense.curvature, spec.width_m).min())
+    rmin = held_radius(dense, spec.width_m, _kernels.HOLD_M)
     za, zb = pose_a[3], pose_b[3]
     zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
     g = spec.target_slope_pct / 100.0

@@ -10,6 +10,7 @@ Example
 from __future__ import annotations
 
 import logging
+import math
 import os
 import zlib
 from dataclasses import dataclass
@@ -91,7 +92,10 @@ class DomainResampler:
     """Algorithm 1's resampling: new targets drawn from the class's feature domain.
 
     Called as ``resampler(ramp, attempt)``. ``radii``/``slopes`` are the values
-    to draw from; ``level`` the ramps whose slope is fixed at 0 (they keep it).
+    to draw from; ``level`` the ramps whose slope is fixed at 0 (they keep it);
+    ``finite`` the ramps that never get an ``inf`` radius (sampling forbids it on a
+    ramp that must turn, :func:`flyover.geometry.feasibility.forbidden_features`):
+    they draw from the finite radii.
     Deterministic: each draw is seeded by ``seed``, the ramp and the attempt.
     """
 
@@ -99,6 +103,12 @@ class DomainResampler:
     slopes: tuple[float, ...]
     level: frozenset[str]
     seed: int
+    finite: frozenset[str] = frozenset()
+
+    def _radii(self, ramp: str) -> tuple[float, ...]:
+        if ramp in self.finite:
+            return tuple(r for r in self.radii if math.isfinite(r))
+        return self.radii
 
     def _rng(self, ramp: str, attempt: int, *salt: int) -> np.random.Generator:
         return np.random.default_rng([self.seed, zlib.crc32(ramp.encode()), attempt, *salt])
@@ -107,7 +117,7 @@ class DomainResampler:
         if not self.radii or not (self.slopes or ramp in self.level):
             return None
         rng = self._rng(ramp, attempt)
-        radius = float(rng.choice(self.radii))
+        radius = float(rng.choice(self._radii(ramp)))
         if ramp in self.level:
             return RampFeatures(radius, LEVEL_SLOPE_PCT)
         return RampFeatures(radius, float(rng.choice(self.slopes)))
@@ -119,7 +129,7 @@ class DomainResampler:
         ``None`` for a level ramp (no slope can help it)."""
         if not self.radii or not self.slopes or ramp in self.level:
             return None
-        radius = float(self._rng(ramp, attempt, 1).choice(self.radii))
+        radius = float(self._rng(ramp, attempt, 1).choice(self._radii(ramp)))
         return RampFeatures(radius, max(self.slopes))
 
 
@@ -130,7 +140,8 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> Domai
     the class's feature sets (i.e. the configured domain as sampled). A ramp
     whose slope is 0 in every feature set is a level ramp (slope fixed by
     sampling, :mod:`flyover.geometry.feasibility`): it keeps slope 0, and its
-    0 is no slope to draw for other ramps.
+    0 is no slope to draw for other ramps. A ramp whose radius is finite in every
+    feature set while others have ``inf`` (``inf`` forbidden on it) keeps a finite one.
     """
     sets = [ramps for _, ramps in feature_sets.values()]
     names = {r for ramps in sets for r in ramps}
@@ -138,7 +149,12 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> Domai
                                      for ramps in sets if r in ramps)}
     radii = sorted({f.radius_m for ramps in sets for f in ramps.values()})
     slopes = sorted({f.slope_pct for ramps in sets for r, f in ramps.items() if r not in level})
-    return DomainResampler(tuple(radii), tuple(slopes), frozenset(level), int(seed))
+    finite = set()
+    if any(math.isinf(r) for r in radii):
+        finite = {r for r in names if all(math.isfinite(ramps[r].radius_m)
+                                          for ramps in sets if r in ramps)}
+    return DomainResampler(tuple(radii), tuple(slopes), frozenset(level), int(seed),
+                           frozenset(finite))
 
 
 def build_sample(topology: Topology, features: FeatureSet, *, class_id: str, sample: int,

@@ -59,12 +59,14 @@ def _topologies(arg: str):
 def _sample(args) -> int:
     from flyover.config import load_config
     from flyover.errors import InputFormatError
-    from flyover.geometry.feasibility import fixed_features
+    from flyover.geometry.feasibility import fixed_features, forbidden_features
+    from flyover.geometry.settings import LayoutSettings
     from flyover.sampling.sample import FEATURES_SCHEMA, sample_topology
     from flyover.sampling.settings import settings_from_config
     from flyover.topology.tables import write_parquet
 
     config = load_config(args.config)
+    layout = LayoutSettings.from_config(config.get("geometry", {}))
     settings = settings_from_config(config, profile=args.profile, t=args.t,
                                     source=args.config or "config/config.yaml")
     seed = config["seed"] if args.seed is None else args.seed
@@ -76,7 +78,9 @@ def _sample(args) -> int:
     for topology in topologies:
         start = time.perf_counter()
         s = sample_topology(topology, settings.profile, t=settings.t, seed=seed,
-                            fixed=fixed_features(topology), budget=settings.budget)
+                            fixed=fixed_features(topology),
+                            extra=forbidden_features(topology, settings.profile, layout),
+                            budget=settings.budget)
         seconds = time.perf_counter() - start
         if args.features:
             write_parquet(s.feature_rows(), FEATURES_SCHEMA, args.features)

@@ -125,7 +125,9 @@ def class_tables(stage):
 #     a child on the side of its parent facing a road attaches where it has room
 # 12: one job per class; fitting seconds in results/geometry_timing/ (geometry.parquet
 #     is the same bytes in every run)
-GEOMETRY_VERSION = 12
+# 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
+#     (length_margin), inf resampled only where sampling allows it
+GEOMETRY_VERSION = 13
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------

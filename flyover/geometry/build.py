@@ -1,0 +1,332 @@
+"""The build loop: every ramp of one feature set fitted, refitted, resampled or recorded.
+
+Decides how hard to try and what to keep; reads the layout state
+(:mod:`flyover.geometry.state`) and the resampler. Ramps are fitted one by one
+(parents first, :meth:`flyover.geometry.state.LayoutState.order`) by
+:func:`flyover.geometry.fit.fit_ramp`, avoiding same-level conflicts with roads
+and the ramps already fitted:
+
+0. a collector-distributor road is built without a search
+   (:mod:`flyover.geometry.collector`); a cloverleaf's outer connector is first
+   fitted with its loop as an obstacle at every height, and one more Bézier
+   piece to bow out with: it goes round the loop, not over or under it (if it
+   cannot meet its targets that way, it is fitted as any other ramp);
+1. a ramp that still conflicts is lifted to the next level (a flyover);
+2. one that misses its targets is fitted again with straight leads (a ramp
+   that climbs may first run along its parent's heading, as long as the climb
+   from that end takes: up beside its road before it turns over the other
+   carriageway), then also with one more Bézier piece, then with one more
+   piece but no leads, then with other seeds (``restarts`` fits in all);
+3. one that still meets fitted ramps at its level makes way (rip-up and
+   reroute): each ramp it meets, if nothing is attached to it yet and it is
+   not its parent, is fitted again on its own targets with the new ramp's
+   curve as an obstacle and kept only if it meets them without conflict;
+   then the new ramp is counted again and, if it still conflicts, refitted;
+4. a ramp that misses its targets after all that is resampled (Algorithm 1)
+   through ``resampler``; what still misses is recorded with the reason;
+5. an interchange in which a ramp still meets something at its level is
+   built again from scratch with other seeds (``rebuilds`` times at most),
+   and the build with the fewest conflicting ramps is kept.
+
+Steps 1–3 of the first build are "the first try" as long as the targets are the sampled ones.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+from typing import Callable, Mapping
+
+from flyover.geometry.assemble import assemble
+from flyover.geometry.collector import collector_fit
+from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
+from flyover.geometry.model import InterchangeGeometry
+from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
+from flyover.geometry.state import LayoutState
+from flyover.topology.model import Topology
+
+__all__ = ["RampOutcome", "Interchange", "build_interchange"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RampOutcome:
+    """How one ramp came out: the fit, first-try success and resamples."""
+
+    ramp: str
+    fit: RampFit
+    first_try_ok: bool
+    resamples: int
+    infeasible: str
+    evaluations: int
+    seconds: float
+    #: the targets of the feature set (the fit's may be resampled ones)
+    first_targets: RampFeatures
+
+
+@dataclass(frozen=True)
+class Interchange:
+    """A built interchange: the geometry.json value and per-ramp outcomes."""
+
+    geometry: InterchangeGeometry
+    outcomes: tuple[RampOutcome, ...]
+
+
+def _collector(b: LayoutState, ramp: str, spec: RampSpec) -> RampFit | None:
+    """A collector-distributor road without a search (:func:`collector_fit`)."""
+    kids = [b.features[k].radius_m for k in b.moves.kids(ramp) if k in b.features]
+    return collector_fit(spec, kids, b.obstacles(), b.st)
+
+
+def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
+                     keep_out: frozenset[str] = frozenset()) -> tuple[RampFit, int, float]:
+    """Fit; while the ramp meets something at its level, lift its crest one level.
+
+    The first fits have no leads; a ramp that still misses its targets is fitted
+    again (``restarts`` times in all) with its straight leads
+    (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
+    cubic cannot bend evenly enough for its radius), then with one more piece
+    but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
+    in plan at all (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`)."""
+    st = b.st
+    evals, secs = 0, 0.0
+    obst = b.obstacles(keep_out)
+    tried = []
+    more = replace(spec, pieces=spec.pieces + 1)
+    plain_more = replace(more, lead_m=(None, None))
+    restarts = [spec, more, plain_more] if any(spec.leads()) else [more]
+    spec = replace(spec, lead_m=(None, None))
+    while True:
+        fit = fit_ramp(spec, obst, st.fit, seed=seed)
+        evals += fit.evaluations
+        secs += fit.seconds
+        tried.append(fit)
+        if fit.conflicts == 0:
+            break
+        higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6]
+        if not higher or (len(tried) > 1 and fit.conflicts >= tried[-2].conflicts):
+            break  # lifting does not help: the conflict is not a crossing
+        spec = replace(spec, z_crest=higher[0])
+    best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
+    restarts += [spec] * st.restarts
+    for k, again in enumerate(restarts[:st.restarts]):  # same targets, other shapes/seeds
+        if best.ok or _systematic(best):
+            break
+        fit = fit_ramp(replace(again, z_crest=best.spec.z_crest), obst, st.fit,
+                       seed=seed + 104_729 * (k + 1))
+        evals += fit.evaluations
+        secs += fit.seconds
+        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+    return best, evals, secs
+
+
+def build_interchange(topology: Topology, lanes: Mapping[str, int],
+                      features: Mapping[str, RampFeatures], *, class_id: str = "",
+                      sample: int = 0, seed: int = 0, settings: LayoutSettings | None = None,
+                      resampler: Callable[[str, int], RampFeatures | None] | None = None
+                      ) -> Interchange:
+    """Lay out the roads and fit every ramp of one feature set.
+
+    Parameters
+    ----------
+    topology
+        The interchange topology.
+    lanes
+        Road id → number of lanes (missing roads get ``default_lanes``).
+    features
+        Ramp id → :class:`RampFeatures` (targets).
+    resampler
+        ``(ramp, attempt) → RampFeatures`` drawing new targets for a ramp that
+        misses its targets (Algorithm 1); ``None`` disables resampling. If it
+        also has a method ``clearing(ramp, attempt)`` (as
+        :class:`flyover.geometry.tables.DomainResampler`), a ramp that still meets
+        something at its level after that is resampled with its draws (the
+        steepest slope), up to ``max_resamples`` times more.
+
+    While a ramp still meets something at its level, the interchange is built
+    again with seeds derived from ``seed`` (``settings.rebuilds`` times at most);
+    the build with the fewest conflicting ramps is returned, with first-try
+    success from the first build and the effort of all builds.
+
+    Raises
+    ------
+    GeometryError
+        When the topology cannot be laid out (naming the element).
+    """
+    st = settings or LayoutSettings()
+    best = None
+    effort: dict[str, tuple[int, float]] = {}
+    first: dict[str, bool] = {}
+    for k in range(st.rebuilds + 1):
+        # a ramp meeting something at its level is never kept if it can be helped: the
+        # whole interchange is built again with other seeds (every ramp's shape, hence
+        # where the later ones find room, changes); the build with the fewest conflicts
+        # wins, its effort includes the discarded builds'
+        ks = seed if k == 0 else (seed * 2_654_435_761 + 97 * k) % (2**32)
+        ic = _build_once(topology, lanes, features, class_id, sample, ks, st, resampler)
+        for o in ic.outcomes:
+            e, t = effort.get(o.ramp, (0, 0.0))
+            effort[o.ramp] = (e + o.evaluations, t + o.seconds)
+            first.setdefault(o.ramp, o.first_try_ok)
+        rank = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
+                sum(o.fit.conflicts for o in ic.outcomes), sum(not o.fit.ok for o in ic.outcomes))
+        if best is None or rank < best[0]:
+            best = (rank, ic)
+        if rank[0] == 0:
+            break
+    ic = best[1]
+    outs = tuple(replace(o, first_try_ok=first[o.ramp], evaluations=effort[o.ramp][0],
+                         seconds=effort[o.ramp][1]) for o in ic.outcomes)
+    return Interchange(ic.geometry, outs)
+
+
+def _build_once(topology: Topology, lanes: Mapping[str, int],
+                features: Mapping[str, RampFeatures], class_id: str, sample: int, seed: int,
+                st: LayoutSettings, resampler) -> Interchange:
+    """One build of :func:`build_interchange` with one seed."""
+    b = LayoutState(topology, lanes, features, st, seed)
+    outcomes = []
+    for k, ramp in enumerate(b.order()):
+        if ramp not in features:
+            raise GeometryError("no features for ramp", source=topology.source, element=ramp)
+        feat = features[ramp]
+        rseed = (seed * 1_000_003 + k * 7919) % (2**32)
+        spec = b.spec(ramp, feat)
+        built = _collector(b, ramp, spec) if b.moves.same_road(ramp) else None
+        fit, evals, secs = None, 0, 0.0
+        if built is not None and built.ok:
+            fit = built
+        elif loops := b.windows.round_loops(ramp):
+            # a cloverleaf's outer connector goes round its loop, not over or under it:
+            # fitted with the loop as an obstacle at every height and one more Bézier piece
+            # to bow out with (without, then with its leads); if it cannot meet its targets
+            # that way, it is fitted as any other ramp
+            more = replace(spec, pieces=spec.pieces + 1)
+            for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
+                kept = fit_ramp(again, b.obstacles(loops), st.fit, seed=rseed + n)
+                evals, secs = evals + kept.evaluations, secs + kept.seconds
+                if kept.ok and kept.conflicts == 0:
+                    fit = kept
+                    break
+            else:  # then lifted a level and with the restarts of any other ramp
+                kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops)
+                evals, secs = evals + e2, secs + s2
+                if kept.ok and kept.conflicts == 0:
+                    fit = kept
+        if fit is None:
+            fit, e2, s2 = _fit_with_levels(b, spec, rseed)
+            evals, secs = evals + e2, secs + s2
+        if fit.conflicts:  # make way: refit the ramps it meets, then it again
+            fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
+            evals, secs = evals + e2, secs + s2
+        first_ok = fit.ok
+        attempts, tried = 0, [fit]
+        while (not fit.ok and resampler is not None and attempts < st.max_resamples
+               and not _systematic(fit)):
+            attempts += 1
+            new = resampler(ramp, attempts)
+            if new is None:
+                break
+            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + attempts)
+            evals += e2
+            secs += s2
+            tried.append(fit2)
+            fit = fit2
+        if not fit.ok:
+            fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))
+        if fit.conflicts and attempts:  # on the last targets too
+            fit, e2, s2 = _reroute(b, ramp, fit, rseed + attempts, outcomes)
+            evals, secs = evals + e2, secs + s2
+        # still crossing something at its level: a crossing is never acceptable, so draw
+        # targets that clear it soonest (the steepest slope of the domain)
+        clearing = getattr(resampler, "clearing", None)
+        k = 0
+        while fit.conflicts and clearing is not None and k < st.max_resamples:
+            k += 1
+            new = clearing(ramp, k)
+            if new is None:
+                break
+            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + 7 * k + 101)
+            evals, secs = evals + e2, secs + s2
+            if fit2.conflicts:
+                fit2, e2, s2 = _reroute(b, ramp, fit2, rseed + 7 * k + 102, outcomes)
+                evals, secs = evals + e2, secs + s2
+            attempts += 1
+            fit = min([fit, fit2], key=lambda f: (f.conflicts, not f.ok))
+        met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
+        reason = "" if fit.ok else _reason(fit, met)
+        b.record(ramp, fit)
+        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs, feat))
+    return Interchange(assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
+
+
+def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
+             outcomes: list[RampOutcome]) -> tuple[RampFit, int, float]:
+    """Rip up and reroute: ``ramp`` still meets fitted ramps at its level, so each of
+    them (one nothing is attached to yet, and not ``ramp``'s parent) is fitted again
+    on its own targets with ``ramp``'s curve as an obstacle; a refit is kept only when
+    it meets its targets with no conflict. Then ``ramp`` is measured against the new
+    obstacles, and fitted again if it still meets something. Returns ``ramp``'s
+    fit and the effort spent."""
+    st = b.st
+    evals, secs = 0, 0.0
+    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
+    used = {r.parent for f in b.fits.values() for r in (f.spec.start, f.spec.end) if r is not None}
+    met = conflicts_with(fit, b.obstacles(), st.fit)
+    movable = [m for m in met if m in b.fits and m not in parents and m not in used]
+    if not movable:
+        return fit, evals, secs
+    by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
+    for k, other in enumerate(movable):
+        old = b.fits[other]
+        b.unrecord(other)
+        b.record(ramp, fit)  # an obstacle while the other one is refitted
+        spec = b.spec(other, RampFeatures(old.spec.target_radius_m, old.spec.target_slope_pct))
+        new, e, t = _fit_with_levels(b, spec, seed + 7_368_787 * (k + 1))
+        evals, secs = evals + e, secs + t
+        b.unrecord(ramp)
+        keep = new if (new.ok and new.conflicts == 0) else old
+        b.record(other, keep)
+        if keep is new:
+            o = outcomes[by_ramp[other]]
+            outcomes[by_ramp[other]] = replace(o, fit=new, infeasible="",
+                                               evaluations=o.evaluations + e,
+                                               seconds=o.seconds + t)
+    fit = recount(fit, b.obstacles(), st.fit)
+    if fit.conflicts:
+        again, e, t = _fit_with_levels(b, replace(fit.spec, z_crest=b.plan.get(ramp)), seed + 1)
+        evals, secs = evals + e, secs + t
+        fit = min([fit, again], key=lambda f: (f.conflicts, not f.ok))
+    return fit, evals, secs
+
+
+def _systematic(fit: RampFit) -> bool:
+    """A level ramp (ends at one height, nothing to pass over) cannot have any slope:
+    resampling cannot help, the feature set is systematically infeasible."""
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    level = abs(za - zb) < 1e-6 and fit.z_crest <= max(za, zb) + 1e-6
+    return level and fit.radius_ok and fit.conflicts == 0 and not fit.slope_ok
+
+
+def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
+    parts = []
+    sp = fit.spec
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    if not fit.slope_ok:
+        if abs(za - zb) < 1e-6 and fit.z_crest <= max(za, zb) + 1e-6:
+            parts.append(f"slope: level ramp (both ends at z={za:.1f} m) cannot have a "
+                         f"{sp.target_slope_pct:g} % slope")
+        else:
+            parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
+    if not fit.radius_ok and math.isinf(sp.target_radius_m):
+        parts.append(f"radius: {fit.min_radius_m:.1f} m, tighter than the {sp.inf_floor_m:g} m "
+                     f"an inf target allows")
+    elif not fit.radius_ok:
+        parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
+    if fit.conflicts:
+        with_ = ", ".join(f"{k} ({n})" for k, n in sorted((met or {}).items()))
+        parts.append(f"same-level conflict ({fit.conflicts} samples)"
+                     + (f" with {with_}" if with_ else ""))
+    return "; ".join(parts)

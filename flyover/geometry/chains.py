@@ -1,0 +1,151 @@
+"""What each ramp is, read from the topology: its ends, the roads its chain connects,
+its movement (turn between those roads) and its kind (loop, stub, collector-distributor
+road, connector between ramps).
+
+Decides the *kind* of a ramp; reads the topology and the road layout (headings).
+
+* The movement of a ramp is that of the roads its chain connects.
+* A loop is a left movement that leaves its parent on the right (``Out-R``),
+  unless its exit ``pos`` is below 0.4 (then it is a semi-directional flyover);
+  it turns 270° to the right. It is decided from the roads the chain connects,
+  not from the parents' local headings: a collector-distributor road with a
+  small radius wiggles.
+* A stub has no end (it splits into other ramps) or no start (formed by merging).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from flyover.topology.model import Kind, Label, Topology
+
+__all__ = ["wrap", "ends", "road_of", "terminal", "Movements"]
+
+
+def wrap(a: float) -> float:
+    """An angle wrapped to -π..π."""
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def ends(topo: Topology, ramp: str) -> tuple[tuple[str, Label] | None, tuple[str, Label] | None]:
+    """``(parent, label)`` of the ramp's start (an ``Out-*`` edge) and end (``In-*``)."""
+    g = topo.graph
+    starts = sorted((u, d["label"]) for u, _, d in g.in_edges(ramp, data=True) if d["label"].is_out)
+    end = sorted((v, d["label"]) for _, v, d in g.out_edges(ramp, data=True)
+                 if not d["label"].is_out)
+    return (starts[0] if starts else None), (end[0] if end else None)
+
+
+def road_of(topo: Topology, node: str, forward: bool, seen=None) -> str | None:
+    """The road a chain of ramps leads to (forward) or comes from."""
+    seen = seen or set()
+    if topo.graph.nodes[node]["kind"] is Kind.ROAD:
+        return node
+    if node in seen:
+        return None
+    seen.add(node)
+    start, end = ends(topo, node)
+    nxt = end if forward else start
+    if nxt is not None:
+        return road_of(topo, nxt[0], forward, seen)
+    g = topo.graph
+    others = sorted(v for _, v, d in g.out_edges(node, data=True)) if forward else \
+        sorted(u for u, _, d in g.in_edges(node, data=True))
+    for o in others:
+        r = road_of(topo, o, forward, seen)
+        if r:
+            return r
+    return None
+
+
+def terminal(topo: Topology, road: str) -> str | None:
+    """``end`` if the carriageway ends here (Out-M), ``start`` if it begins (In-M)."""
+    g = topo.graph
+    if any(d["label"] is Label.OUT_M for _, _, d in g.out_edges(road, data=True)):
+        return "end"
+    if any(d["label"] is Label.IN_M for _, _, d in g.in_edges(road, data=True)):
+        return "start"
+    return None
+
+
+class Movements:
+    """The kind and movement of every ramp of ``topo`` on the laid-out ``roads``."""
+
+    def __init__(self, topo: Topology, roads: Mapping):
+        self.topo, self.roads, self.g = topo, roads, topo.graph
+
+    def ends(self, ramp: str):
+        return ends(self.topo, ramp)
+
+    def road_of(self, node: str, forward: bool) -> str | None:
+        return road_of(self.topo, node, forward)
+
+    def movement(self, ramp: str) -> float | None:
+        """The turn between the roads the ramp's chain connects (``None`` if unknown)."""
+        a, b = road_of(self.topo, ramp, False), road_of(self.topo, ramp, True)
+        if not a or not b:
+            return None
+        return float(wrap(self.roads[b].heading - self.roads[a].heading))
+
+    def is_loop(self, ramp: str) -> bool:
+        """A left movement between the roads, leaving its parent on the right."""
+        start, end = ends(self.topo, ramp)
+        if start is None or end is None:
+            return False
+        if start[1] is not Label.OUT_R:
+            return False
+        raw = self.movement(ramp)
+        if raw is None or not (abs(raw - np.pi / 2) < 0.2):
+            return False
+        pos = self.g.edges[start[0], ramp].get("pos")
+        return pos is None or pos >= 0.4
+
+    def is_stub(self, ramp: str) -> bool:
+        start, end = ends(self.topo, ramp)
+        return start is None or end is None
+
+    def same_road(self, ramp: str) -> bool:
+        """A collector-distributor road: leaves a road and rejoins the same one."""
+        start, end = ends(self.topo, ramp)
+        return bool(start and end and start[0] == end[0] and start[0] in self.roads)
+
+    def kids(self, ramp: str) -> list[str]:
+        """The ramps leaving ``ramp`` or joining it (a stub's children, a C-D road's
+        exits and entrances)."""
+        g = self.g
+        return [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out] + \
+            [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
+
+    def lanes(self, ramp: str) -> int:
+        """Lanes of a ramp: a stub has one per ramp it splits into (is formed from)."""
+        start, end = ends(self.topo, ramp)
+        if end is None:
+            return max(1, sum(1 for _, _, d in self.g.out_edges(ramp, data=True)
+                              if d["label"].is_out))
+        if start is None:
+            return max(1, sum(1 for _, _, d in self.g.in_edges(ramp, data=True)
+                              if not d["label"].is_out))
+        return 1
+
+    def other_road(self, ramp: str, road: str) -> str | None:
+        """The road at the other end of ``ramp``'s chain from ``road``."""
+        start, _ = ends(self.topo, ramp)
+        return road_of(self.topo, ramp, start is not None and start[0] == road)
+
+    def goes_round_loop(self, ramp: str, other: str, road: str) -> bool:
+        """Whether ``ramp`` and the loop ``other``, both on ``road``, join the same two
+        roads the other way round: a cloverleaf's outer connector round its loop."""
+        return self.is_loop(other) and not self.is_loop(ramp) and \
+            self.other_road(ramp, road) == self.other_road(other, road)
+
+    def crosses_loop_exit(self, ramp: str, other: str, road: str) -> bool:
+        """Whether ``ramp``, joining ``road`` after the loop ``other`` leaves it, has to pass
+        over the loop's exit branch: it does unless it comes from the road the loop goes
+        to (then it goes round the loop, as a cloverleaf's outer connector: a trumpet's
+        ramps pass over)."""
+        start, end = ends(self.topo, ramp)
+        if not self.is_loop(other) or end is None or end[0] != road:
+            return False
+        return road_of(self.topo, ramp, False) != road_of(self.topo, other, True)

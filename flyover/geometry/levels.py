@@ -1,0 +1,110 @@
+"""Level plan: the crest heights fixed up front, and the room ramps leave for them.
+
+Decides the crest of every direct left turn, the height of a stub's free end
+and the room a ramp leaves toward the crossing for its children; reads the road
+layout, the ramps' movements (:mod:`flyover.geometry.chains`), the targets and
+the settings.
+
+* A direct left turn crosses the through expressways, so its crest is the
+  lowest level ``clearance_m`` above the highest of them. Where left turns run
+  both ways between two expressways they cross each other: those leaving the
+  second expressway (a T's terminating one) go one level higher — the two
+  flyover levels of a four-level stack, the three levels of a directional T.
+* A stub feeding or fed by such a ramp ends ``clearance_m`` from its road
+  toward that crest; if its other children (right turns) go on to a road (a
+  turbine), no higher than ``clearance_m`` (and 0.5 m) under the lowest
+  planned crest, so that they pass under every flyover.
+* A planned ramp's road ends, and those of a ramp it leaves or joins, keep room
+  from the crossing to climb to (descend from) the crest at the ramp's slope.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from flyover.geometry.chains import Movements, ends, road_of, wrap
+from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
+
+__all__ = ["LevelPlan"]
+
+
+class LevelPlan:
+    """Crests (``crests``: ramp → z) and the heights and room that follow from them."""
+
+    def __init__(self, moves: Movements, features: Mapping[str, RampFeatures],
+                 st: LayoutSettings):
+        self.moves, self.features, self.st = moves, features, st
+        self.roads = moves.roads
+        self.crests = self._crests()
+
+    def _crests(self) -> dict[str, float]:
+        topo, st, roads = self.moves.topo, self.st, self.roads
+        through = [r for r in roads.values() if np.isinf(r.t_lo) and np.isinf(r.t_hi)]
+        top = max(r.z for r in through or roads.values())
+        levels = [z for z in st.levels_m if z >= top + st.fit.clearance_m - 1e-6]
+        if not levels:
+            return {}
+        lefts = {}
+        for ramp in topo.ramps:
+            start, end = ends(topo, ramp)
+            a, b = road_of(topo, ramp, False), road_of(topo, ramp, True)
+            if start is None or end is None or not a or not b:
+                continue
+            raw = wrap(roads[b].heading - roads[a].heading)
+            if raw > 1.0 and not self.moves.is_loop(ramp):
+                lefts[ramp] = (roads[a].expressway, roads[b].expressway)
+        plan = {}
+        for ramp, (ea, eb) in lefts.items():
+            both_ways = (eb, ea) in lefts.values()
+            k = roads[road_of(topo, ramp, False)].level if both_ways else 0
+            plan[ramp] = float(levels[min(k, len(levels) - 1)])
+        return plan
+
+    def low_connector(self, ramp: str) -> bool:
+        """A ramp between two other ramps, without a planned crest."""
+        return ramp not in self.crests and all(e is not None and e[0] not in self.roads
+                                               for e in self.moves.ends(ramp))
+
+    def stub_z(self, ramp: str, z_road: float, zf: float) -> float:
+        """Height of a stub's free end: the clearance toward its planned children's crest
+        (so that they clear the roads near the stub), else ``zf``. If its unplanned
+        children (right turns) go on to a road, they are fitted after the flyovers: then
+        no higher than the clearance (and a margin) under the lowest planned crest, so
+        that they pass under every flyover. (Right turns between two stubs are fitted
+        before the flyovers, which pass round or over them.)"""
+        kids = self.moves.kids(ramp)
+        crests = [self.crests[k] for k in kids if k in self.crests]
+        if not crests:
+            return zf
+        c = max(crests)
+        if c <= z_road:
+            return zf
+        clear = self.st.fit.clearance_m
+        z = min(c, z_road + clear)
+        if any(k not in self.crests and not self.low_connector(k) for k in kids):
+            # they are fitted after the flyovers (they go on to a road): keep them under
+            z = min(z, min(self.crests.values()) - clear - Z_MARGIN)
+        return float(z) if z > z_road + 0.25 else float(min(c, z_road + clear))
+
+    def kids_room(self, kids: list[str], z: float, turning: bool = True) -> float:
+        """Room a ramp leaves toward the crossing for the ramps leaving or joining it
+        (``kids``, at height ``z``): for the planned ones to climb to their crest, and
+        (``turning``) for the turning ones to turn at their radius (``turn_room`` times
+        it: the turn, and its straight leads and transitions; ``inf_reference_m`` for an
+        ``inf`` target)."""
+        extra = 0.0
+        for k in kids:
+            if k not in self.features:
+                continue
+            if k in self.crests:
+                gk = max(self.features[k].slope_pct, 0.5) / 100.0
+                extra = max(extra, abs(self.crests[k] - z) / gk + self.st.fit.transition_m)
+            mov = self.moves.movement(k)
+            if turning and mov is not None and abs(mov) > 1.0:
+                r = self.features[k].radius_m
+                extra = max(extra, self.st.turn_room * r if math.isfinite(r)
+                            else self.st.fit.inf_reference_m)
+        return extra

@@ -1,0 +1,227 @@
+"""Attachment windows (rails): where along its parent a ramp may leave or join it.
+
+Decides, for each end of a ramp, the parent line, the lateral offset and the
+window ``lo..hi`` along it (a :class:`flyover.geometry.fit.Rail`); reads the road
+layout, the ramps' kinds, the ramps fitted so far (their stations and
+attachments) and the ramp's targets.
+
+* *Which side of the centre* follows from the movement: right turns and direct
+  left turns exit before the crossing and merge after it; loops do the opposite;
+  stubs that split exit before, those that merge join after. A ramp keeps
+  ``crossing_margin_m`` (and the room ``extra`` its climb or children need) from
+  the crossing; a collector-distributor road ``cd_clear_m`` more.
+* The order of attachments on one parent follows ``pos``: attachments placed
+  later keep ``gap_m`` from earlier ones, from the whole length a stub runs
+  along the road or a loop reaches along it.
+* A cloverleaf's outer connector, which goes round the loop joining the same two
+  roads, attaches where an arc of its target radius clears every point of the
+  loop. A ramp joining a road after a loop leaves it, and not coming from the
+  road the loop goes to (a trumpet), passes over the loop's exit branch and
+  keeps room after it to descend.
+* A ramp leaving (joining) a loop does so before (after) the loop turns. A ramp
+  attached on the side of a parent that faces a road (J1's r2 joins r3 on the
+  left where r3 runs along R4's edge) attaches only where its lane is clear of
+  that road.
+* A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
+  crossing; any other ramp within what it needs (``bound``, from
+  :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
+  that a long detour is never cheaper for the search than a conflict.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from flyover.geometry.chains import Movements, ends
+from flyover.geometry.fit import Rail
+from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.settings import LayoutSettings, RampFeatures
+from flyover.topology.model import Label
+
+__all__ = ["AttachmentWindows"]
+
+
+class AttachmentWindows:
+    """The rails of a ramp's ends, given what is fitted so far (see the module doc)."""
+
+    def __init__(self, moves: Movements, fitted: FittedRamps, st: LayoutSettings):
+        self.moves, self.fitted, self.st = moves, fitted, st
+        self.roads, self.g, self.topo = moves.roads, moves.g, moves.topo
+
+    def rail(self, ramp: str, feat: RampFeatures, end, is_start: bool, loop: bool,
+             width: float, extra: float = 0.0, bound: float | None = None) -> Rail:
+        """The rail of one end (``end`` = ``(parent, label)``) of ``ramp``; on a road, no
+        farther than ``bound`` beyond the room it keeps from the crossing."""
+        node, label = end
+        if node in self.roads:
+            pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
+            return self.road_rail(node, ramp, feat, label, is_start, loop, pos, width, extra,
+                                  bound)
+        return self.ramp_rail(node, ramp, label, is_start, width)
+
+    def road_rail(self, road: str, ramp: str, feat: RampFeatures, label: Label,
+                  is_start: bool, loop: bool, pos: float | None, width: float,
+                  extra: float = 0.0, bound: float | None = None) -> Rail:
+        r, st, moves = self.roads[road], self.st, self.moves
+        if label in (Label.OUT_M, Label.IN_M):
+            off = 0.0
+        elif label.side == "right":
+            off = -r.lanes * st.lane_width_m
+        else:
+            off = width
+        other = max([x.half_width for x in self.roads.values() if x.expressway != r.expressway]
+                    or [0.0])
+        tz = other + st.crossing_margin_m + extra
+        if moves.same_road(ramp):  # collector-distributor: leave room for what attaches to it
+            tz += st.cd_clear_m
+        if label is Label.OUT_M or (pos is not None and pos >= 0.99 and np.isfinite(r.t_hi)):
+            lo = hi = r.t_hi
+        elif label is Label.IN_M or (pos is not None and pos <= 0.01 and np.isfinite(r.t_lo)):
+            lo = hi = r.t_lo
+        else:
+            before = is_start != loop
+            reach = max(st.reach_m, tz + st.gap_m)
+            if moves.is_stub(ramp):  # a stub attaches just beyond the room it leaves
+                reach = tz + st.stub_window_m
+            elif bound is not None:  # no farther out than the ramp needs
+                reach = max(tz + st.gap_m, min(reach, tz + bound))
+            lo, hi = (-reach, -tz) if before else (tz, reach)
+            lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
+            if pos is not None:
+                for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
+                    round_loop = moves.goes_round_loop(ramp, other, road)
+                    if p < pos:
+                        lo = max(lo, t_max + st.gap_m)
+                        if moves.crosses_loop_exit(ramp, other, road):
+                            # it passes over the loop's exit branch, then descends
+                            g = max(feat.slope_pct, 0.5) / 100.0
+                            lo = max(lo, t_other + st.fit.clearance_m / g
+                                     + st.fit.transition_m + st.gap_m)
+                        if round_loop:
+                            lo = max(lo, self.round_loop(other, road, width, +1, feat))
+                    elif p > pos:
+                        hi = min(hi, t_min - st.gap_m)
+                        if round_loop:
+                            hi = min(hi, self.round_loop(other, road, width, -1, feat))
+            if lo > hi - 1.0:  # no room left between the others: keep the side's order
+                lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
+        if hi - lo < 1e-3:
+            hi = lo + 1e-3
+        return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
+
+    def round_loops(self, ramp: str) -> frozenset[str]:
+        """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
+        joining the same two roads the other way round, on the road they share)."""
+        out = set()
+        for end in ends(self.topo, ramp):
+            if end is None or end[0] not in self.roads:
+                continue
+            for other in self.fitted.fits:
+                if any(e is not None and e[0] == end[0] for e in ends(self.topo, other)) \
+                        and self.moves.goes_round_loop(ramp, other, end[0]):
+                    out.add(other)
+        return frozenset(out)
+
+    def round_loop(self, loop: str, road: str, width: float, side: int,
+                   feat: RampFeatures) -> float:
+        """Where along ``road`` a ramp turning at its target radius must attach to go round
+        the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
+        distance an arc of that radius needs to get as far from the road."""
+        r, st = self.roads[road], self.st
+        d = np.array([math.cos(r.heading), math.sin(r.heading)])
+        rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
+        t = rel @ d
+        lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
+        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
+        c = width + self.fitted.width[loop] / 2 + 1.0
+        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
+                        rad + c)
+        return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
+
+    def ramp_rail(self, parent: str, ramp: str, label: Label, is_start: bool,
+                  width: float) -> Rail:
+        st = self.fitted.stations[parent]
+        length = st["s"][-1]
+        pw = self.fitted.width[parent]
+        p_start, p_end = ends(self.topo, parent)
+        if label.side == "right":
+            off = -pw if (p_end is not None and p_start is not None) else -(pw - width)
+        else:
+            off = width if (p_end is not None and p_start is not None) else 0.0
+        if is_start and p_end is None:
+            lo = hi = length
+        elif not is_start and p_start is None:
+            lo = hi = 0.0
+        else:
+            key = (parent, ramp) if is_start else (ramp, parent)
+            pos = self.g.edges[key].get("pos")
+            if pos is not None:
+                lo, hi = max(0.05, pos - 0.15) * length, min(0.95, pos + 0.15) * length
+                # diverges and merges keep the order ``pos`` gives them on this parent, a
+                # gap apart from those already attached (a merge just before a diverge
+                # leaves no room for lane changes: movements become unroutable)
+                gap = min(self.st.gap_m, 0.05 * length)
+                wlo, whi = lo, hi
+                for p_other, _, _, _, t_other in self.fitted.attached.get(parent, []):
+                    if p_other < pos:
+                        lo = max(lo, t_other + gap)
+                    elif p_other > pos:
+                        hi = min(hi, t_other - gap)
+                if lo > hi - 1.0:
+                    lo, hi = wlo, whi
+            elif self.moves.is_loop(parent):  # leave a loop before it turns, join it after
+                head = st["heading"]
+                if is_start:
+                    turned = np.abs(head - head[0]) > 0.35
+                    lo, hi = 0.05 * length, float(st["s"][np.argmax(turned)]) if turned.any() \
+                        else 0.6 * length
+                else:
+                    turned = np.abs(head - head[-1]) > 0.35
+                    last = len(head) - 1 - np.argmax(turned[::-1])
+                    lo = float(st["s"][last]) if turned.any() else 0.4 * length
+                    hi = 0.95 * length
+                lo, hi = min(lo, hi), max(lo, hi)
+            elif is_start:
+                lo, hi = 0.15 * length, 0.6 * length
+            else:
+                lo, hi = 0.4 * length, 0.85 * length
+            lo, hi = self.room_beside(parent, off, width, lo, hi)
+        if hi - lo < 1e-3:
+            hi = lo + 1e-3
+        return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
+
+    def room_beside(self, parent: str, off: float, width: float, lo: float,
+                    hi: float) -> tuple[float, float]:
+        """The part of ``lo..hi`` on a fitted parent where a child ``width`` wide, beside it
+        at ``off``, is clear of the roads at its level.
+
+        A ramp that joins a road runs along its edge for a while (and one that leaves a
+        road starts along it): a child on the side facing that road has no room there,
+        whatever its shape (J1's r2 joins r3 on the left, between r3 and R4). When some
+        stations of ``lo..hi`` lack that room, the window becomes the run of stations
+        with room (within 5..95 % of the parent) that overlaps it most, else the longest;
+        unchanged when every station has room or none has."""
+        st = self.fitted.stations[parent]
+        s, xy, head, z = st["s"], st["xy"], st["heading"], st["z"]
+        left = np.stack([-np.sin(head), np.cos(head)], -1)
+        clear = np.ones(len(s), bool)
+        for k in np.linspace(off - width + 0.5, off + 1.0, 5):  # across the child's lane
+            q = xy + k * left
+            for x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, zr in self.fitted.bands:
+                rel = q - (x0, y0)
+                along, lat = rel @ (dx, dy), rel @ (-dy, dx)
+                clear &= ~((along >= t_lo) & (along <= t_hi) & (lat >= lat_lo) & (lat <= lat_hi)
+                           & (np.abs(z - zr) < self.st.fit.clearance_m))
+        inside = (s >= lo) & (s <= hi)
+        if clear[inside].all() or not clear.any():
+            return lo, hi
+        length = s[-1]
+        ok = clear & (s >= 0.05 * length) & (s <= 0.95 * length)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+        runs = [(s[a], s[b - 1]) for a, b in zip(edges[::2], edges[1::2]) if b - 1 > a]
+        if not runs:
+            return lo, hi
+        a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
+        return float(a), float(b)

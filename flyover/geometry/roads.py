@@ -1,0 +1,123 @@
+"""Road layout: where the expressways' carriageways run and at which level.
+
+Decides each carriageway's line (origin, heading), extent and height; reads the
+topology (expressways, T terminals, which side ramps leave and join on) and the
+settings.
+
+* Expressways are straight lines through the centre: the first through
+  expressway runs north–south (carriageway 1 northbound), the second east–west;
+  its direction is chosen so that as many ramps as possible leave and join on
+  the side they turn to (right exits turning right). Further expressways are
+  placed at 45° steps. An expressway that ends here (``Out-M``/``In-M``, a T)
+  is a half line: its carriageways end/begin ``terminal_m`` from the centre on
+  the side the topology implies (farther by ``terminal_extra``: far enough for
+  a ramp to climb one level there). Each expressway is on its own level
+  (0, 1, ...), the terminating one of a T above the through one.
+* A carriageway's reference line is its left (median) edge, ``median_m / 2``
+  from the axis; where ramps leave or join a carriageway on its left (they run
+  in the median) the median is wider by two ramp lanes and shoulders.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from flyover.geometry.chains import ends, road_of, terminal, wrap
+from flyover.geometry.settings import LayoutSettings
+from flyover.topology.model import Label, Topology
+
+__all__ = ["RoadLine", "layout_roads", "road_bands"]
+
+
+@dataclass(frozen=True)
+class RoadLine:
+    """One carriageway as laid out: its reference line (median edge) and level."""
+
+    id: str
+    expressway: str
+    lanes: int
+    level: int
+    z: float
+    origin: tuple[float, float]
+    heading: float
+    t_lo: float  # extent of the carriageway along its line (-inf .. inf for through roads)
+    t_hi: float
+    half_width: float  # of its expressway, median to outer edge
+
+
+def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
+                 terminal_extra: float = 0.0) -> dict[str, RoadLine]:
+    """Every carriageway of ``topo`` laid out (see the module doc)."""
+    exps = topo.expressways
+    term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
+    order = sorted(exps, key=lambda e: (term_of[e], e))
+    g = topo.graph
+    # ramps leaving or joining a carriageway on its left run in the median: widen it
+    left = {e: any(d["label"] in (Label.OUT_L, Label.IN_L) and (u in rs or v in rs)
+                   for u, v, d in g.edges(data=True)) for e, rs in exps.items()}
+    wide = 2 * (st.ramp_lane_width_m + st.shoulder_width_m)
+    median = {e: st.median_m + (wide if left[e] else 0.0) for e in exps}
+    half = {e: median[e] / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
+            + st.shoulder_width_m for e, rs in exps.items()}
+
+    def place(options: dict[str, float]) -> dict[str, RoadLine]:
+        roads = {}
+        for k, e in enumerate(order):
+            rs = exps[e]
+            h1 = options[e]
+            for i, r in enumerate(rs):
+                h = h1 if i == 0 else h1 + np.pi
+                o = (median[e] / 2) * np.array([np.sin(h), -np.cos(h)])
+                other = max([half[x] for x in exps if x != e] or [0.0])
+                term = terminal(topo, r)
+                t_lo, t_hi = -np.inf, np.inf
+                if term == "end":
+                    t_hi = -(other + st.terminal_m + terminal_extra)
+                elif term == "start":
+                    t_lo = other + st.terminal_m + terminal_extra
+                n = lanes.get(r, st.default_lanes)
+                roads[r] = RoadLine(r, e, int(n), k, k * st.level_height_m,
+                                    (float(o[0]), float(o[1])), float(wrap(h)), t_lo, t_hi,
+                                    half[e])
+        return roads
+
+    base = {e: np.pi / 2 - k * np.pi / 2 if k < 2 else np.pi / 2 - k * np.pi / 4
+            for k, e in enumerate(order)}
+    best, best_score = None, -1e9
+    for flip in ([False, True] if len(order) > 1 else [False]):
+        opts = dict(base)
+        if flip:
+            opts[order[1]] += np.pi
+        roads = place(opts)
+        score = 0
+        for ramp in topo.ramps:
+            a = road_of(topo, ramp, False)
+            b = road_of(topo, ramp, True)
+            if not a or not b:
+                continue
+            raw = wrap(roads[b].heading - roads[a].heading)
+            if abs(abs(raw) - np.pi / 2) > 0.1:
+                continue
+            turn = "left" if raw > 0 else "right"
+            for end in ends(topo, ramp):
+                if end is None or end[1].side == "middle":
+                    continue
+                score += 1 if end[1].side == turn else (-1 if end[1].side == "left" else 0)
+        if score > best_score:
+            best, best_score = roads, score
+    return best
+
+
+def road_bands(roads: Mapping[str, RoadLine], st: LayoutSettings) -> np.ndarray:
+    """The roads' driving bands as :attr:`flyover.geometry.fit.Obstacles.lines` rows
+    (in ``roads`` order)."""
+    rows = []
+    for r in roads.values():
+        d = (math.cos(r.heading), math.sin(r.heading))
+        rows.append([r.origin[0], r.origin[1], d[0], d[1], max(r.t_lo, -1e5),
+                     min(r.t_hi, 1e5), -r.lanes * st.lane_width_m, 0.0, r.z])
+    return np.array(rows)

@@ -1,0 +1,95 @@
+"""The state of one interchange while it is built: its parts, wired together.
+
+Decides nothing of its own: it lays out the roads (:mod:`flyover.geometry.roads`),
+classifies the ramps (:mod:`flyover.geometry.chains`), fixes the level plan
+(:mod:`flyover.geometry.levels`) and connects the attachment windows
+(:mod:`flyover.geometry.rails`) and the ramp specs (:mod:`flyover.geometry.specs`)
+to the ramps fitted so far (:mod:`flyover.geometry.fitted`). Reads a topology,
+its lanes and targets, and the settings. The build loop
+(:mod:`flyover.geometry.build`) asks it for specs and obstacles and records fits.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+from flyover.geometry.chains import Movements, ends
+from flyover.geometry.fit import Obstacles, RampFit, RampSpec
+from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.levels import LevelPlan
+from flyover.geometry.rails import AttachmentWindows
+from flyover.geometry.roads import layout_roads
+from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
+from flyover.geometry.specs import RampSpecs
+from flyover.topology.model import Topology
+
+__all__ = ["LayoutState"]
+
+
+class LayoutState:
+    """Roads, ramp kinds, level plan, fitted ramps, windows and specs of one build."""
+
+    def __init__(self, topo: Topology, lanes: Mapping[str, int],
+                 features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
+        self.topo, self.st, self.seed = topo, st, seed
+        self.features = dict(features)
+        # a T's terminal is far enough out for a ramp to climb one level there
+        slopes = [f.slope_pct for f in features.values() if f.slope_pct > 0]
+        extra = st.level_height_m / (min(slopes) / 100) + st.fit.transition_m if slopes else 0.0
+        self.roads = layout_roads(topo, lanes, st, extra)
+        self.g = topo.graph
+        self.moves = Movements(topo, self.roads)
+        width = {r: self.moves.lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
+        self.fitted = FittedRamps(self.moves, width, st)
+        self.levels = LevelPlan(self.moves, self.features, st)
+        self.windows = AttachmentWindows(self.moves, self.fitted, st)
+        self.specs = RampSpecs(self.moves, self.levels, self.fitted, self.windows, st)
+
+    @property
+    def plan(self) -> dict[str, float]:
+        """Planned crests: ramp → z (:attr:`LevelPlan.crests`)."""
+        return self.levels.crests
+
+    @property
+    def fits(self) -> dict[str, RampFit]:
+        return self.fitted.fits
+
+    @property
+    def width(self) -> Mapping[str, float]:
+        return self.fitted.width
+
+    def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
+        return self.specs.spec(ramp, feat)
+
+    def obstacles(self, keep_out: frozenset[str] = frozenset()) -> Obstacles:
+        return self.fitted.obstacles(keep_out)
+
+    def record(self, ramp: str, fit: RampFit) -> None:
+        self.fitted.record(ramp, fit)
+
+    def unrecord(self, ramp: str) -> None:
+        self.fitted.unrecord(ramp)
+
+    def order(self) -> list[str]:
+        """The order ramps are fitted in: parents first; in one round, stubs and
+        road-to-road ramps in id order, a low connector between two ramps (a stack's
+        right turn: no freedom where it attaches) before the flyovers, which then pass
+        over it."""
+        done: set[str] = set()
+        out = []
+        todo = list(self.topo.ramps)
+        while todo:
+            ready = []
+            for r in todo:
+                start, end = ends(self.topo, r)
+                deps = [e[0] for e in (start, end) if e and e[0] not in self.roads]
+                if all(d in done for d in deps):
+                    ready.append(r)
+            if not ready:
+                raise GeometryError("ramps attach to each other in a cycle",
+                                    source=self.topo.source, element=", ".join(todo))
+            for r in sorted(ready, key=lambda r: not self.levels.low_connector(r)):
+                done.add(r)
+                out.append(r)
+                todo.remove(r)
+        return out
