@@ -3,7 +3,9 @@
 
 # Bump when the algorithm changes: params are rerun triggers.
 # 2: slope fixed at 0 on level ramps (flyover.geometry.feasibility), not sampled.
-SAMPLING_VERSION = 2
+# 3: per-ramp domains from the layout (no radius inf on a turning ramp, no (radius, slope) a
+#    ramp cannot build within geometry.max_ramp_length_m): the geometry section feeds them.
+SAMPLING_VERSION = 3
 
 
 rule sample_class:
@@ -24,6 +26,7 @@ rule sample_class:
         profile=config["sampling"]["profile"],
         profile_spec=config["sampling"]["profiles"].get(config["sampling"]["profile"]),
         seed=config["seed"],
+        geometry=config["geometry"],  # the per-ramp domains (flyover.geometry.feasibility)
     threads: 1
     # measured per Slurm job: peak 0.63 GB, CPU 4 s at t <= 2 (t = 3 arrays take longer)
     resources:

@@ -2,6 +2,7 @@
 import logging
 
 from flyover.geometry.feasibility import fixed_features, forbidden_features
+from flyover.geometry.layout import LayoutSettings
 from flyover.sampling.sample import COVERAGE_SCHEMA, FEATURES_SCHEMA, sample_topology
 from flyover.sampling.settings import settings_from_config
 from flyover.topology.io import read_graphml
@@ -17,7 +18,8 @@ settings = settings_from_config(
 topology = read_graphml(snakemake.input.topology)
 sampling = sample_topology(topology, settings.profile, t=settings.t, seed=snakemake.params.seed,
                            class_id=class_id, fixed=fixed_features(topology),
-                           extra=forbidden_features(topology, settings.profile),
+                           extra=forbidden_features(topology, settings.profile,
+                                                    LayoutSettings.from_config(p.geometry)),
                            budget=settings.budget)
 write_parquet(sampling.feature_rows(), FEATURES_SCHEMA, snakemake.output.features)
 write_parquet([sampling.coverage_row()], COVERAGE_SCHEMA, snakemake.output.coverage)
