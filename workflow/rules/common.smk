@@ -14,7 +14,7 @@ validate_config(config, "config/config.yaml")
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 3  # 2: representative.graphml per class; 3: safe names, FLYOVER ids
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
-EXPORT_VERSION = 3
+EXPORT_VERSION = 4
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 
 
