@@ -27,7 +27,7 @@ from flyover.opendrive.writer import xodr_bytes
 TOLERANCE_TYPES = {"connections_predecessor", "connections_successor",
                    "connections_left_forking_adj", "connections_right_forking_adj",
                    "connections_left_merging_adj", "connections_right_merging_adj"}
-TOLERANCE_M = 1e-3
+TOLERANCE_M = 1e-6
 
 
 def _registry_reachable() -> bool:

@@ -238,7 +238,14 @@ def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOp
             if par is None:
                 raise ExportError(f"attaches to unknown parent {att.parent!r}", element=r.id)
             side = att.label[-1]
-            x, y, h = par.pose(att.s_m)
+            # within 0.5 m of its parent's end (start) a diverge (merge) is written as a fork
+            # (join) at that end: the ramp meets it exactly there, not up to 0.5 m off
+            s_att = att.s_m
+            if at_start and abs(s_att - par.length) <= 0.5:
+                s_att = par.length
+            elif not at_start and abs(s_att) <= 0.5:
+                s_att = 0.0
+            x, y, h = par.pose(s_att)
             fork = att.parent in free_end or att.parent in free_start
             if side == "M":
                 off = 0.0
