@@ -88,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
                         totals[k] = totals.get(k, 0) + n
                     gaps_cr = {k: f"{x:.1e}" for k, x in v["connection_gaps_m"].items()}
                     line.append(f"verifier {v['errors']} gaps in CR map {gaps_cr}")
+                    for it in v.get("intersections", []):
+                        line.append("intersecting bounds: lanelet {lanelet} width {width_start_m:.3f}"
+                                    " .. {width_end_m:.3f} m, least inside {min_inner_width_m}".format(**it))
                 else:
                     line.append(f"verifier FAILED {v['error']}")
         line.append(f"pyopendrive {'ok' if a['pyopendrive']['ok'] else 'FAIL'}")

@@ -48,7 +48,8 @@ def _verify(network):
             examples.setdefault(key, [list(map(int, loc)) if isinstance(loc, tuple) else int(loc)
                                       for loc in locations[:3]])
     return {"ok": True, "errors": counts, "examples": examples,
-            "connection_gaps_m": _connection_gaps(network, locations_of)}
+            "connection_gaps_m": _connection_gaps(network, locations_of),
+            "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
 
 
 def _connection_gaps(network, locations_of):
@@ -75,6 +76,39 @@ def _connection_gaps(network, locations_of):
                       float(np.linalg.norm(first.right_vertices[-1] - second.right_vertices[0])))
             worst = max(worst, gap)
         out[key] = worst
+    for key, locations in locations_of.items():
+        if "forking_adj" not in key and "merging_adj" not in key:
+            continue
+        # a lanelet that forks from (merges into) its neighbour: at its start (end) its
+        # boundary ends should lie on the neighbour's; the distance they are apart
+        at = 0 if "forking" in key else -1
+        worst = 0.0
+        for loc in locations:
+            a = network.find_lanelet_by_id(int(loc[0]))
+            b = network.find_lanelet_by_id(int(loc[1]))
+            if a is None or b is None:
+                continue
+            d = min(float(np.linalg.norm(p - q)) for p in (a.left_vertices[at], a.right_vertices[at])
+                    for q in (b.left_vertices[at], b.right_vertices[at]))
+            worst = max(worst, d)
+        out[key] = worst
+    return out
+
+
+def _intersections(network, locations):
+    """Each lanelet whose left and right boundaries the verifier finds intersecting:
+    its width at both ends and the least width between them."""
+    import numpy as np
+
+    out = []
+    for loc in locations:
+        ll = network.find_lanelet_by_id(int(loc[0] if isinstance(loc, (tuple, list)) else loc))
+        if ll is None:
+            continue
+        w = np.linalg.norm(ll.left_vertices - ll.right_vertices, axis=1)
+        out.append({"lanelet": int(ll.lanelet_id), "type": str(getattr(ll, "lanelet_type", "")),
+                    "width_start_m": float(w[0]), "width_end_m": float(w[-1]),
+                    "min_inner_width_m": float(w[1:-1].min()) if len(w) > 2 else None})
     return out
 
 
