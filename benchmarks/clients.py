@@ -31,7 +31,7 @@ from pathlib import Path
 
 from flyover.clients.designs import catalog_geometry, catalog_names
 from flyover.clients.links import dangling_lanes, link_gaps
-from flyover.clients.tools import routed_movements, run_clients
+from flyover.clients.tools import routed_movements, run_clients, two_movement_trips
 from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.validate import movements
 from flyover.opendrive.writer import xodr_bytes
@@ -78,9 +78,15 @@ def main(argv: list[str] | None = None) -> int:
             line.append(f"lanelets {conv['lanelets']:>3}")
             line.append(f"ll2 {'ok' if ll2.get('ok') and not ll2.get('routing_errors') else 'FAIL'}")
             if g is not None and ll2.get("ok"):
-                same = set(routed_movements(ll2, net)) == set(movements(g))
-                routed_ok += same
-                line.append(f"routes==movements {same}")
+                routed, wanted = set(routed_movements(ll2, net)), set(movements(g))
+                routed_ok += routed == wanted
+                extra = routed - wanted
+                trips = two_movement_trips(extra, wanted)
+                line.append(f"routes==movements {routed == wanted}")
+                if routed != wanted:
+                    line.append(f"missing {sorted(wanted - routed)} extra {sorted(extra)} "
+                                f"(two movements through {sorted(set(trips.values()))}: "
+                                f"{len(trips)}/{len(extra)})")
             if args.verify:
                 v = a["verifier"]
                 if v["ok"]:

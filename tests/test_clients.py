@@ -14,7 +14,7 @@ from lxml import etree
 from flyover.clients.designs import catalog_geometry, catalog_names
 from flyover.clients.links import dangling_lanes, link_gaps
 from flyover.clients.tools import ClientsError, find_clients_python, routed_movements, run_clients, \
-    setup_clients_venv
+    setup_clients_venv, two_movement_trips
 from flyover.geometry.model import write_geometry
 from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import read_xodr
@@ -28,6 +28,11 @@ TOLERANCE_TYPES = {"connections_predecessor", "connections_successor",
                    "connections_left_forking_adj", "connections_right_forking_adj",
                    "connections_left_merging_adj", "connections_right_merging_adj"}
 TOLERANCE_M = 1e-6
+#: movements Lanelet2 does not route (design, feature set): the Lanelet2 export of
+#: commonroad-scenario-designer 0.8.5 starts the deceleration lane's lanelet where no
+#: lanelet ends (CommonRoad's own map gives it its predecessor), so no route leads onto
+#: the ramp; our lane links there are complete (no dangling lane, gaps < 1e-6 m)
+LANELET2_MISSES = {("j1", 1): {("R2", "R4")}}
 
 
 def _registry_reachable() -> bool:
@@ -163,18 +168,19 @@ def test_export_of_a_missing_client_environment_names_it(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("variant", [0, 1])
 @pytest.mark.parametrize("name", catalog_names())
-def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name):
-    results = []
-    for variant in (0, 1):
-        g, path = _write(tmp_path, name, variant)
-        [a] = run_clients([{"xodr": path, "commonroad": tmp_path / "m.xml",
-                            "lanelet2": tmp_path / "m.osm", "verify": True, "routing": True,
-                            "pyopendrive": True, "pyxodr": True}], python=clients_python)
-        results.append(a)
-        assert a["conversion"]["ok"], a["conversion"]
-        assert a["commonroad"]["ok"] and a["lanelet2"]["ok"] and a["lanelet2"]["routing_errors"] == []
-        assert set(routed_movements(a["lanelet2"], read_xodr(path))) == set(movements(g))
-        assert set(a["verifier"]["errors"]) <= TOLERANCE_TYPES, a["verifier"]["errors"]
-        assert max(gap for *_, gap in link_gaps(read_xodr(path))) < TOLERANCE_M
-        assert a["pyopendrive"]["ok"] and a["pyxodr"]["ok"]
+def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name, variant):
+    g, path = _write(tmp_path, name, variant)
+    [a] = run_clients([{"xodr": path, "commonroad": tmp_path / "m.xml",
+                        "lanelet2": tmp_path / "m.osm", "verify": True, "routing": True,
+                        "pyopendrive": True, "pyxodr": True}], python=clients_python)
+    assert a["conversion"]["ok"], a["conversion"]
+    assert a["commonroad"]["ok"] and a["lanelet2"]["ok"] and a["lanelet2"]["routing_errors"] == []
+    assert set(a["verifier"]["errors"]) <= TOLERANCE_TYPES, a["verifier"]["errors"]
+    assert max(gap for *_, gap in link_gaps(read_xodr(path))) < TOLERANCE_M
+    assert a["pyopendrive"]["ok"] and a["pyxodr"]["ok"]
+    routed, wanted = set(routed_movements(a["lanelet2"], read_xodr(path))), set(movements(g))
+    assert wanted - routed == LANELET2_MISSES.get((name, variant), set())
+    extra = routed - wanted  # only U-turns: two movements in a row through a weave
+    assert set(two_movement_trips(extra, wanted)) == extra

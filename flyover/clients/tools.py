@@ -28,7 +28,7 @@ from flyover.errors import FlyoverError
 from flyover.opendrive.reader import XodrNetwork
 
 __all__ = ["ClientsError", "CLIENT_PACKAGES", "find_clients_python", "setup_clients_venv",
-           "run_clients", "routed_movements", "road_ends"]
+           "run_clients", "routed_movements", "road_ends", "two_movement_trips"]
 
 log = logging.getLogger(__name__)
 
@@ -177,4 +177,21 @@ def routed_movements(answer: Mapping, net: XodrNetwork, tol_m: float = 0.5
         u, v = src.get(int(a)), dst.get(int(b))
         if u is not None and v is not None:
             out[(u, v)] = out.get((u, v), 0) + 1
+    return out
+
+
+def two_movement_trips(extra: Iterable[tuple[str, str]], movements: Iterable[tuple[str, str]]
+                       ) -> dict[tuple[str, str], str]:
+    """Which of ``extra`` are two movements in a row through one road: ``{(u, w): v}``.
+
+    A router that may change lanes finds U-turns the topology's movements leave
+    out (they follow ramps only): into road ``v`` by one ramp and out of it by
+    the next, through the auxiliary lane of a weaving section.
+    """
+    mv = set(movements)
+    out = {}
+    for u, w in extra:
+        via = sorted(v for (a, v) in mv if a == u and (v, w) in mv and v not in (u, w))
+        if via:
+            out[(u, w)] = via[0]
     return out
