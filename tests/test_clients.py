@@ -170,10 +170,17 @@ def test_export_format_lanelet2_writes_a_map_its_library_loads(tmp_path, clients
     assert not (tmp_path / "interchange.xodr").exists()  # the .xodr stays a temporary
 
 
-def test_export_of_a_missing_client_environment_names_it(tmp_path, monkeypatch):
+def test_export_without_the_client_environment_fails_naming_it_and_writes_nothing(
+        tmp_path, monkeypatch, capsys):
+    from flyover.cli import main  # noqa: PLC0415
+
     monkeypatch.setenv("FLYOVER_CLIENTS_PYTHON", str(tmp_path / "nope" / "python"))
     with pytest.raises(ClientsError, match="FLYOVER_CLIENTS_PYTHON"):
         find_clients_python()
+    write_geometry(catalog_geometry("trumpet"), tmp_path / "geometry.json")
+    assert main(["export", str(tmp_path / "geometry.json"), "--format", "commonroad"]) == 1
+    assert "FLYOVER_CLIENTS_PYTHON" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["geometry.json"]
 
 
 @pytest.mark.slow
