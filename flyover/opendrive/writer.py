@@ -238,7 +238,14 @@ def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOp
             if par is None:
                 raise ExportError(f"attaches to unknown parent {att.parent!r}", element=r.id)
             side = att.label[-1]
-            x, y, h = par.pose(att.s_m)
+            # within 0.5 m of its parent's end (start) a diverge (merge) is written as a fork
+            # (join) at that end: the ramp meets it exactly there, not up to 0.5 m off
+            s_att = att.s_m
+            if at_start and abs(s_att - par.length) <= 0.5:
+                s_att = par.length
+            elif not at_start and abs(s_att) <= 0.5:
+                s_att = 0.0
+            x, y, h = par.pose(s_att)
             fork = att.parent in free_end or att.parent in free_start
             if side == "M":
                 off = 0.0
@@ -689,6 +696,8 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         succ_links[a.road_id] = dict(links)
         pred_links[b.road_id] = dict((y, x) for x, y in links)
 
+    _close_gore_shoulders(pieces, layouts, pred_links, succ_links)
+
     # -- XML ------------------------------------------------------------------------
     root = etree.Element("OpenDRIVE")
     allpts = []
@@ -733,6 +742,41 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
                 etree.SubElement(c, "laneLink", **{"from": str(a), "to": str(b)})
             cid += 1
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+
+
+def _close_gore_shoulders(pieces: dict[str, list[_Piece]], layouts: dict[int, list],
+                          pred_links: dict[int, dict], succ_links: dict[int, dict]) -> None:
+    """A connecting road's shoulder that no lane feeds (leads on) opens from (closes to) zero width.
+
+    At a diverge the branch whose shoulder is not the parent's begins beside a
+    driving lane (the gore), at a merge it ends beside one; at full width it
+    was a lane that continued nowhere: link-following clients (CommonRoad's
+    converter) met a dangling lane there. Over the connecting road it now
+    opens (closes) like an auxiliary lane, so every lane of nonzero width at
+    a road end is linked, and no link joins lanes that do not meet.
+    """
+    for plist in pieces.values():
+        for p in plist:
+            if p.junction is None:
+                continue
+            secs = layouts[p.road_id]
+            L = p.s1 - p.s0
+            for first, links, end in ((True, pred_links, p.pred), (False, succ_links, p.succ)):
+                if end is None or end[0] != "road":
+                    continue
+                idx = 0 if first else len(secs) - 1
+                s0, (off, lanes) = secs[idx]
+                keys = [k for k, _ in lanes]
+                if ("sh",) not in keys:
+                    continue
+                lid = -(keys.index(("sh",)) + 1)
+                if lid in links.get(p.road_id, {}):
+                    continue
+                span = (secs[1][0] if len(secs) > 1 else L) - s0 if first else L - s0
+                w = lanes[keys.index(("sh",))][1]
+                new = _rising(w.a, span) if first else _change(w.a, 0.0, span)
+                lanes = [(k, new if k == ("sh",) else c) for k, c in lanes]
+                secs[idx] = (s0, (off, lanes))
 
 
 def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict) -> None:

@@ -14,7 +14,7 @@ validate_config(config, "config/config.yaml")
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 4  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
-EXPORT_VERSION = 4  # 4: plan.png in 40 m chunks, fixed layout
+EXPORT_VERSION = 5  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 
 

@@ -1,0 +1,256 @@
+"""Run inside the clients' environment (``.venv-clients``); never imported by flyover.
+
+Reads one JSON request from stdin: ``{"jobs": [{"xodr": path, "commonroad": path|null,
+"lanelet2": path|null, "verify": bool, "routing": bool, "pyopendrive": bool,
+"pyxodr": bool}, ...]}`` and prints one JSON line per job, in order. Each client
+runs in its own ``try``: one failure is reported (type, message, where) and the
+others still run.
+"""
+
+import contextlib
+import json
+import logging
+import sys
+import time
+import traceback
+import warnings
+
+warnings.filterwarnings("ignore")
+logging.disable(logging.WARNING)
+
+
+def _failure(e):
+    tb = traceback.extract_tb(e.__traceback__)
+    where = f"{tb[-1].filename.split('site-packages/')[-1]}:{tb[-1].lineno}" if tb else ""
+    return {"ok": False, "error": f"{type(e).__name__}: {e}", "where": where}
+
+
+def _verify(network):
+    """The map verifier's invalid states per formula, verification only (no repair)."""
+    from crdesigner.verification_repairing.config import MapVerParams
+    from crdesigner.verification_repairing.verification.formula_ids import extract_formula_ids
+    from crdesigner.verification_repairing.verification.groups_handler import GroupsHandler
+    from crdesigner.verification_repairing.verification.map_verifier import MapVerifier
+
+    config = MapVerParams()
+    every = list(extract_formula_ids())
+    counts, examples, locations_of = {}, {}, {}
+    groups = GroupsHandler()
+    while groups.is_next_group():
+        formulas = sorted(set(every) & set(groups.next_group()), key=str)
+        if not formulas:
+            continue
+        config.verification.formulas = formulas
+        for fid, locations in MapVerifier(network, config).verify().items():
+            key = getattr(fid, "value", str(fid))
+            counts[key] = counts.get(key, 0) + len(locations)
+            locations_of.setdefault(key, []).extend(locations)
+            examples.setdefault(key, [list(map(int, loc)) if isinstance(loc, tuple) else int(loc)
+                                      for loc in locations[:3]])
+    return {"ok": True, "errors": counts, "examples": examples,
+            "connection_gaps_m": _connection_gaps(network, locations_of),
+            "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+
+
+def _connection_gaps(network, locations_of):
+    """Per connection error type, the largest distance between the linked lanelets' boundary ends.
+
+    The verifier calls two linked lanelets unconnected when their boundary end
+    points differ by more than its ``connection_thresh`` (1e-8 m); this is how much
+    they actually differ in the converted map.
+    """
+    import numpy as np
+
+    out = {}
+    for key, locations in locations_of.items():
+        if key not in ("connections_predecessor", "connections_successor"):
+            continue
+        worst = 0.0
+        for loc in locations:
+            a = network.find_lanelet_by_id(int(loc[0]))
+            b = network.find_lanelet_by_id(int(loc[1]))
+            if a is None or b is None:
+                continue
+            first, second = (b, a) if key == "connections_predecessor" else (a, b)
+            gap = max(float(np.linalg.norm(first.left_vertices[-1] - second.left_vertices[0])),
+                      float(np.linalg.norm(first.right_vertices[-1] - second.right_vertices[0])))
+            worst = max(worst, gap)
+        out[key] = worst
+    for key, locations in locations_of.items():
+        if "forking_adj" not in key and "merging_adj" not in key:
+            continue
+        # a lanelet that forks from (merges into) its neighbour: at its start (end) its
+        # boundary ends should lie on the neighbour's; the distance they are apart
+        at = 0 if "forking" in key else -1
+        worst = 0.0
+        for loc in locations:
+            a = network.find_lanelet_by_id(int(loc[0]))
+            b = network.find_lanelet_by_id(int(loc[1]))
+            if a is None or b is None:
+                continue
+            d = min(float(np.linalg.norm(p - q)) for p in (a.left_vertices[at], a.right_vertices[at])
+                    for q in (b.left_vertices[at], b.right_vertices[at]))
+            worst = max(worst, d)
+        out[key] = worst
+    return out
+
+
+def _intersections(network, locations):
+    """Each lanelet whose left and right boundaries the verifier finds intersecting:
+    its width at both ends and the least width between them."""
+    import numpy as np
+
+    out = []
+    for loc in locations:
+        ll = network.find_lanelet_by_id(int(loc[0] if isinstance(loc, (tuple, list)) else loc))
+        if ll is None:
+            continue
+        w = np.linalg.norm(ll.left_vertices - ll.right_vertices, axis=1)
+        out.append({"lanelet": int(ll.lanelet_id), "type": str(getattr(ll, "lanelet_type", "")),
+                    "width_start_m": float(w[0]), "width_end_m": float(w[-1]),
+                    "min_inner_width_m": float(w[1:-1].min()) if len(w) > 2 else None})
+    return out
+
+
+def _write_commonroad(scenario, path):
+    from commonroad.common.file_reader import CommonRoadFileReader
+    from commonroad.common.file_writer import CommonRoadFileWriter, OverwriteExistingFile
+    from commonroad.planning.planning_problem import PlanningProblemSet
+
+    CommonRoadFileWriter(scenario, PlanningProblemSet(), author="flyover", affiliation="",
+                         source="flyover OpenDRIVE via commonroad-scenario-designer",
+                         tags=set()).write_to_file(path, OverwriteExistingFile.ALWAYS)
+    back, _ = CommonRoadFileReader(path).open()  # its own library reads it back
+    return {"ok": True, "lanelets": len(back.lanelet_network.lanelets)}
+
+
+def _lanelet2(scenario, path, routing):
+    import lanelet2
+    from crdesigner.map_conversion.lanelet2.cr2lanelet import CR2LaneletConverter
+    from lxml import etree
+    from pyproj import Transformer
+
+    conv = CR2LaneletConverter()
+    osm = conv(scenario)
+    with open(path, "wb") as f:
+        f.write(etree.tostring(osm, xml_declaration=True, encoding="UTF-8", pretty_print=True))
+    projector = lanelet2.projection.UtmProjector(lanelet2.io.Origin(0.0, 0.0))
+    lmap, load_errors = lanelet2.io.loadRobust(path, projector)
+    out = {"ok": not load_errors, "load_errors": [str(e) for e in load_errors][:10],
+           "n_load_errors": len(load_errors), "lanelets": len(lmap.laneletLayer)}
+    if not routing:
+        return out
+    rules = lanelet2.traffic_rules.create(lanelet2.traffic_rules.Locations.Germany,
+                                          lanelet2.traffic_rules.Participants.Vehicle)
+    graph = lanelet2.routing.RoutingGraph(lmap, rules)
+    out["routing_errors"] = [str(e) for e in graph.checkValidity()][:10]
+    back = Transformer.from_crs(conv.transformer.target_crs, conv.transformer.source_crs,
+                                always_xy=False)
+
+    def local(p3):
+        gps = projector.reverse(lanelet2.core.BasicPoint3d(p3.x, p3.y, p3.z))
+        x, y = back.transform(gps.lat, gps.lon)
+        return [x - conv.origin_utm[0], y - conv.origin_utm[1]]
+
+    passable = [ll for ll in lmap.laneletLayer if rules.canPass(ll)]
+    sources = [ll for ll in passable if not graph.previous(ll)]
+    sinks = {ll.id for ll in passable if not graph.following(ll)}
+    routes = []
+    for src in sources:
+        reach = {ll.id for ll in graph.reachableSet(src, 1e12, 0, True)}
+        routes += [[src.id, s] for s in sorted(reach & sinks)]
+    ends = {ll.id: (local(ll.centerline[0]), local(ll.centerline[-1])) for ll in passable}
+    out.update(sources={ll.id: ends[ll.id][0] for ll in sources},
+               sinks={i: ends[i][1] for i in sinks}, routes=routes)
+    return out
+
+
+def _pyopendrive(path):
+    from pyopendrive import OpenDriveMap
+
+    m = OpenDriveMap.load(path)
+    lanes = links = 0
+    for road in m.roads:
+        for layer in road.lane_layers:
+            for sec in layer.sections:
+                for lane in (sec.lanes.left or ()) + (sec.lanes.right or ()):
+                    lanes += 1
+                    links += len(lane.links.predecessors) + len(lane.links.successors)
+    # elements it does not parse (our header userData) are notes, not errors
+    errors = [d for d in m.diagnostics if d.code != "unsupported-element"]
+    return {"ok": not errors, "roads": len(m.roads), "junctions": len(m.junctions),
+            "lanes": lanes, "lane_links": links,
+            "diagnostics": [f"{d.code}: {d.message} ({d.element})" for d in m.diagnostics][:10]}
+
+
+def _pyxodr(path):
+    import numpy as np
+    from pyxodr.road_objects.network import RoadNetwork
+
+    net = RoadNetwork(path, resolution=0.5)
+    links, lanes, finite = 0, 0, True
+    for road in net.get_roads():
+        for sec in road.lane_sections:
+            for lane in sec.lanes:
+                lanes += 1
+                finite &= bool(np.isfinite(lane.boundary_line).all())
+                links += len(lane.traffic_flow_successors)
+    return {"ok": lanes > 0 and finite, "lanes": lanes, "lane_successors": links,
+            "boundaries_finite": finite}
+
+
+def run(job):
+    res = {"xodr": job["xodr"], "seconds": {}}
+    if job.get("pyopendrive"):
+        t = time.perf_counter()
+        try:
+            res["pyopendrive"] = _pyopendrive(job["xodr"])
+        except Exception as e:  # noqa: BLE001 - reported, not raised
+            res["pyopendrive"] = _failure(e)
+        res["seconds"]["pyopendrive"] = time.perf_counter() - t
+    if job.get("pyxodr"):
+        t = time.perf_counter()
+        try:
+            res["pyxodr"] = _pyxodr(job["xodr"])
+        except Exception as e:  # noqa: BLE001
+            res["pyxodr"] = _failure(e)
+        res["seconds"]["pyxodr"] = time.perf_counter() - t
+    if not (job.get("commonroad") or job.get("lanelet2") or job.get("verify")):
+        return res
+    from crdesigner.map_conversion.map_conversion_interface import opendrive_to_commonroad
+
+    t = time.perf_counter()
+    try:
+        scenario = opendrive_to_commonroad(job["xodr"])
+        res["conversion"] = {"ok": True, "lanelets": len(scenario.lanelet_network.lanelets)}
+    except Exception as e:  # noqa: BLE001
+        res["conversion"] = _failure(e)
+        return res
+    finally:
+        res["seconds"]["conversion"] = time.perf_counter() - t
+    for key, fn in (("commonroad", lambda: _write_commonroad(scenario, job["commonroad"])),
+                    ("lanelet2", lambda: _lanelet2(scenario, job["lanelet2"], job.get("routing"))),
+                    ("verifier", lambda: _verify(scenario.lanelet_network))):
+        if key == "verifier" and not job.get("verify") or key != "verifier" and not job.get(key):
+            continue
+        t = time.perf_counter()
+        try:
+            res[key] = fn()
+        except Exception as e:  # noqa: BLE001
+            res[key] = _failure(e)
+        res["seconds"][key] = time.perf_counter() - t
+    return res
+
+
+def main():
+    request = json.load(sys.stdin)
+    out = sys.stdout
+    for job in request["jobs"]:
+        with contextlib.redirect_stdout(sys.stderr):  # the clients print progress
+            res = run(job)
+        out.write(json.dumps(res, default=str) + "\n")
+        out.flush()
+
+
+if __name__ == "__main__":
+    main()
