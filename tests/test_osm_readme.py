@@ -189,3 +189,39 @@ def test_a_ramp_back_onto_its_own_carriageway_is_a_self_check_row():
                        attrs={"osm": {"junctions": [([0.0, 0.0], "A1", "r1", "Out-R")], "lines": {}}})
     rows = [r for r in self_check(t) if r["check"] == "ramp"]
     assert len(rows) == 1 and "r2" in rows[0]["detail"] and "same carriageway B2" in rows[0]["detail"]
+
+
+def _load_benchmark():
+    import importlib.util  # noqa: PLC0415
+
+    spec = importlib.util.spec_from_file_location("osm_bench", Path(__file__).resolve().parents[1] / "benchmarks"
+                                                  / "osm.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_workers_give_the_same_bytes_and_leave_the_collector_as_found(tmp_path, caplog):
+    """Two copies of every shared extract tiled into one .osm.pbf (many places): built in 2
+    forked workers (``OsmOptions.workers``, as the workflow's import rule passes its threads),
+    every topology is byte for byte the one built in one process; the garbage collector is on
+    and nothing stays frozen afterwards."""
+    import gc  # noqa: PLC0415
+    import json  # noqa: PLC0415
+
+    from flyover.topology.io import graphml_bytes  # noqa: PLC0415
+
+    bench = _load_benchmark()
+    files = sorted(str(p) for p in OSM_DIR.glob("*.osm"))
+    tiled = tmp_path / "tiled.osm.pbf"
+    bench.build_tiled(tiled, 2, bench._load(files))
+    caplog.set_level(logging.ERROR)
+
+    def dump(ts):
+        return [(graphml_bytes(t), json.dumps(t.attrs, sort_keys=True, default=str)) for t in ts]
+
+    one = dump(read_osm_topologies(tiled, OsmOptions(workers=1)))
+    two = dump(read_osm_topologies(tiled, OsmOptions(workers=2)))
+    assert len(one) == 2 * sum(len(v) for v in README_ROWS.values())  # one per README row (20, 26 too)
+    assert two == one
+    assert gc.isenabled() and gc.get_freeze_count() == 0

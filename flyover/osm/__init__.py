@@ -33,7 +33,7 @@ def default_options() -> OsmOptions:
         return OsmOptions()
 
 
-def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = None, *, workers: int = 1):
+def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = None, *, workers: int | None = None):
     """Every motorway-to-motorway interchange of an OSM extract, as topologies.
 
     ``.osm``, ``.osm.gz``, ``.osm.bz2`` and ``.osm.pbf`` are read by one reader
@@ -43,9 +43,11 @@ def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = No
     node id); ``topology.attrs["osm"]`` carries the geometry for
     :func:`flyover.osm.plot.plot_osm_topology`, ramps carry ``length_m``,
     ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``). ``workers`` > 1
-    reads the places of a large extract in that many processes.
+    (default ``options.workers``) builds the places of a large extract in that many
+    processes (the same result).
     """
     options = options or default_options()
+    workers = options.workers if workers is None else workers
     net = read_motorway_network(path, options.highways, options.bbox)
     if not net.ways:
         where = " inside the bbox" if options.bbox else ""

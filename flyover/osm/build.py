@@ -32,6 +32,7 @@ Steps (each survives messy data with a logged reason):
 
 from __future__ import annotations
 
+import gc
 import logging
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
@@ -42,7 +43,7 @@ from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
-from flyover.osm.reader import OsmNetwork, normalize_ref
+from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
 from flyover.topology.names import MAX_NAME_LENGTH, safe_name
 
@@ -84,6 +85,9 @@ class OsmOptions:
     bbox
         ``(min_lon, min_lat, max_lon, max_lat)``: only network ways with a node
         inside are read (the city's entry under ``osm.city_bbox`` in the config).
+    workers
+        Processes that build the places of a large extract (not in the config:
+        the workflow passes its rule's threads). Results do not depend on it.
     """
 
     trunk_as_motorway: bool = False
@@ -94,6 +98,7 @@ class OsmOptions:
     connector_max_length_m: float = 400.0
     driving_side: str = "auto"
     bbox: tuple[float, float, float, float] | None = None
+    workers: int = 1
 
     @classmethod
     def from_config(cls, config: dict, city: str | None = None) -> "OsmOptions":
@@ -117,6 +122,16 @@ class OsmOptions:
         return frozenset(base)
 
 
+def _cached(st: "_Stretch", key: str, compute):
+    """``compute()`` once per stretch geometry (a probe point is asked for at every junction
+    label; the cache is void when the stretch's xy is replaced, as when stretches are joined)."""
+    hit = st.__dict__.get(key)
+    if hit is None or hit[0] is not st.xy:
+        hit = (st.xy, compute())
+        st.__dict__[key] = hit
+    return hit[1]
+
+
 @dataclass
 class _Stretch:
     """A run of segments between junctions, all road or all link."""
@@ -137,11 +152,7 @@ class _Stretch:
 
     @property
     def length(self) -> float:
-        cached = self.__dict__.get("_length")
-        if cached is None or cached[0] is not self.xy:  # xy is replaced when stretches are joined
-            cached = (self.xy, float(arclength(self.xy)[-1]))
-            self.__dict__["_length"] = cached
-        return cached[1]
+        return _cached(self, "_length", lambda: float(arclength(self.xy)[-1]))
 
 
 class _Network:
@@ -238,12 +249,13 @@ class _Network:
         return float(np.dot(mean, _unit(self.xy[b] - self.xy[a])))
 
     def _add_chain(self, wid: int, nodes: list[int]) -> None:
+        seg, succ, pred = self.seg, self.succ, self.pred
         for a, b in zip(nodes, nodes[1:]):
-            if a == b or (a, b) in self.seg:
+            if a == b or (a, b) in seg:
                 continue
-            self.seg[(a, b)] = wid
-            self.succ[a].append(b)
-            self.pred[b].append(a)
+            seg[(a, b)] = wid
+            succ[a].append(b)
+            pred[b].append(a)
 
     def _remove_seg(self, a: int, b: int) -> None:
         del self.seg[(a, b)]
@@ -260,9 +272,11 @@ class _Network:
     def snap_dangling_links(self) -> None:
         road = None
         for n in sorted(self.succ.keys() | self.pred.keys()):
+            deg = len(self.pred[n]) + len(self.succ[n])  # (cheap test first: most nodes are no end)
+            if deg != 1:
+                continue
             ins, outs = self._classes_at(n)
-            deg = len(self.pred[n]) + len(self.succ[n])
-            if deg != 1 or ROAD in ins | outs or n in self.net.ordinary:
+            if ROAD in ins | outs or n in self.net.ordinary:
                 continue
             if road is None:  # (re)built only after a carriageway segment was split
                 road = [(a, b) for (a, b), w in self.seg.items() if self.cls[w] == ROAD]
@@ -293,31 +307,29 @@ class _Network:
                        f"way {wid_road}: snapped", logging.WARNING)
 
     # -- 5. stretches -----------------------------------------------------
-    def _is_break(self, n: int) -> bool:
-        pred, succ = self.pred.get(n, ()), self.succ.get(n, ())
-        if len(pred) != 1 or len(succ) != 1:
-            return True
-        cls, seg = self.cls, self.seg
-        return cls[seg[(pred[0], n)]] != cls[seg[(n, succ[0])]]
-
     def build_stretches(self) -> list[_Stretch]:
         out: list[_Stretch] = []
-        nodes_all = self.succ.keys() | self.pred.keys()
-        breaks = {n for n in nodes_all if self._is_break(n)}
-        starts = sorted(n for n in breaks if self.succ.get(n))
-        limit = len(self.seg) + 1
+        succ, pred, seg, wcls, pos = self.succ, self.pred, self.seg, self.cls, self.xy
+        breaks = set()  # a node where stretches break: not one in, one out of the same class (runs three times per place)
+        for n in succ.keys() | pred.keys():
+            p, s = pred.get(n), succ.get(n)
+            if not p or not s or len(p) != 1 or len(s) != 1 or wcls[seg[(p[0], n)]] != wcls[seg[(n, s[0])]]:
+                breaks.add(n)
+        starts = sorted(n for n in breaks if succ.get(n))
+        limit = len(seg) + 1
         for s0 in starts:
-            for nxt in sorted(self.succ[s0]):
-                nodes, ways = [s0, nxt], [self.seg[(s0, nxt)]]
-                cls = self.cls[ways[0]]
-                while nodes[-1] not in breaks and len(nodes) <= limit:
-                    a = nodes[-1]
-                    b = self.succ[a][0]
+            for nxt in sorted(succ[s0]):
+                nodes, ways = [s0, nxt], [seg[(s0, nxt)]]
+                cls = wcls[ways[0]]
+                b = nxt
+                while b not in breaks and len(nodes) <= limit:
+                    a = b
+                    b = succ[a][0]
                     nodes.append(b)
-                    w = self.seg[(a, b)]
+                    w = seg[(a, b)]
                     if w != ways[-1]:
                         ways.append(w)
-                xy = np.array([self.xy[i] for i in nodes])
+                xy = np.array([pos[i] for i in nodes])
                 out.append(_Stretch(len(out), nodes, cls, ways, xy))
         return out
 
@@ -384,8 +396,8 @@ class _Network:
             fwd_adj[a].append(b)
             bwd_adj[b].append(a)
 
-        def reach(adj):
-            seen, stack = set(on_road), list(on_road)
+        def reach(adj):  # (the search starts only from road nodes where links are)
+            seen, stack = set(on_road), [n for n in on_road if n in adj]
             while stack:
                 for m in adj[stack.pop()]:
                     if m not in seen:
@@ -600,12 +612,12 @@ class _Builder:
     def _probe_out(self, s: _Stretch) -> np.ndarray:
         if s.start in self.nw.snapped and len(s.xy) > 1:
             return s.xy[1]  # the link's real start: which side of the carriageway it lies on
-        return point_at(s.xy, min(_PROBE_M, 0.5 * s.length))
+        return _cached(s, "_probe_out", lambda: point_at(s.xy, min(_PROBE_M, 0.5 * s.length)))
 
     def _probe_in(self, s: _Stretch) -> np.ndarray:
         if s.end in self.nw.snapped and len(s.xy) > 1:
             return s.xy[-2]
-        return point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length))
+        return _cached(s, "_probe_in", lambda: point_at(s.xy[::-1], min(_PROBE_M, 0.5 * s.length)))
 
     def _lanes(self, gid: int) -> int:
         vals = [self.nw.net.ways[w].tag("lanes") for w in self.groups[gid].ways]
@@ -863,13 +875,24 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
         Every interchange found breaks a model rule (the first one's reason).
     """
     out, failed = [], []
-    parts = split_network(net, options)
+    with gc_paused():
+        parts = split_network(net, options)
     if workers > 1 and len(parts) > 1:
         import multiprocessing  # noqa: PLC0415
 
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
-            results = pool.starmap(_build_part_safe, [(p, options) for p in parts],
+        global _PARTS  # noqa: PLW0603 (inherited by the forked workers, not pickled to them)
+        _PARTS = (parts, options)
+        # the workers inherit the whole network: frozen, their garbage collector does not walk
+        # it again and again (that made the build grow faster than the extract); the parent
+        # only collects results meanwhile
+        gc.freeze()
+        try:
+            with gc_paused(), multiprocessing.get_context("fork").Pool(workers, initializer=gc.enable) as pool:
+                results = pool.map(_build_inherited_part, range(len(parts)),
                                    chunksize=max(1, len(parts) // (8 * workers)))
+        finally:
+            _PARTS = None
+            gc.unfreeze()
     else:
         results = [_build_part_safe(p, options) for p in parts]
     for found, exc in results:
@@ -966,6 +989,15 @@ def split_network(net: OsmNetwork, options: OsmOptions) -> list[OsmNetwork]:
         sub.ordinary = {n: net.ordinary[n] for n in sub.coords if n in net.ordinary}
         out.append(sub)
     return out
+
+
+#: (places, options) while forked workers build them
+_PARTS: tuple[list[OsmNetwork], OsmOptions] | None = None
+
+
+def _build_inherited_part(k: int) -> tuple[list[Topology], TopologyError | None]:
+    parts, options = _PARTS
+    return _build_part_safe(parts[k], options)
 
 
 def _build_part_safe(net: OsmNetwork, options: OsmOptions) -> tuple[list[Topology], TopologyError | None]:

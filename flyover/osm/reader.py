@@ -18,8 +18,10 @@ motorway network.
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -107,6 +109,20 @@ def _ele(value: str | None) -> float | None:
     return ele if ele == ele and abs(ele) < 1e5 else None
 
 
+@contextmanager
+def gc_paused():
+    """Python's cyclic garbage collector off for a while: reading makes millions of small
+    acyclic objects (node ids, coordinates), and each of the collector's full passes walks all
+    of them again, so that the time grew faster than the extract."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
 def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
                           bbox: tuple[float, float, float, float] | None = None) -> OsmNetwork:
     """Read the ways whose ``highway`` is in ``highways`` and their nodes.
@@ -138,56 +154,57 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
                                source=src)
     ways: dict[int, OsmWay] = {}
     coords: dict[int, tuple[float, float]] = {}
-    try:
-        # 1. the network's ways (tag filter in libosmium) with their nodes' locations
-        #    (node-location index in libosmium: no node reaches Python)
-        flt = osmium.filter.TagFilter(*(("highway", h) for h in sorted(highways)))
-        proc = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY).with_locations("flex_mem") \
-            .with_filter(osmium.filter.EntityFilter(osmium.osm.WAY)).with_filter(flt)
-        for w in proc:
-            nodes, pts = [], []
-            for nd in w.nodes:
-                nodes.append(nd.ref)
-                loc = nd.location
-                if loc.valid():
-                    pts.append((nd.ref, loc.lat, loc.lon))
-            if len(nodes) < 2:
-                log.warning("%s: way %d: fewer than two nodes, ignored", src, w.id)
-                continue
-            if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
-                                             for _, lat, lon in pts):
-                continue
-            tags = {t.k: t.v for t in w.tags}
-            ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
-            for ref, lat, lon in pts:
-                coords[ref] = (lat, lon)
-        needed = {n for w in ways.values() for n in w.nodes}
-        # 2. ordinary roads touching the network (exits) and the ele of network nodes
-        if ways:
-            second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
-                .with_filter(osmium.filter.KeyFilter("highway", "ele"))
-            for o in second:
-                if o.is_node():
-                    if "ele" in o.tags and o.id in needed:
-                        ele = _ele(o.tags["ele"])
-                        if ele is None:
-                            log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
-                        else:
-                            net.elevation[o.id] = ele
+    with gc_paused():  # (nothing read makes a reference cycle)
+        try:
+            # 1. the network's ways (tag filter in libosmium) with their nodes' locations
+            #    (node-location index in libosmium: no node reaches Python)
+            flt = osmium.filter.TagFilter(*(("highway", h) for h in sorted(highways)))
+            proc = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY).with_locations("flex_mem") \
+                .with_filter(osmium.filter.EntityFilter(osmium.osm.WAY)).with_filter(flt)
+            for w in proc:
+                nodes, pts = [], []
+                for nd in w.nodes:
+                    nodes.append(nd.ref)
+                    loc = nd.location
+                    if loc.valid():
+                        pts.append((nd.ref, loc.lat, loc.lon))
+                if len(nodes) < 2:
+                    log.warning("%s: way %d: fewer than two nodes, ignored", src, w.id)
                     continue
-                hw = o.tags.get("highway")
-                if hw is None or hw in highways:
+                if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
+                                                 for _, lat, lon in pts):
                     continue
-                info = None
-                for nd in o.nodes:
-                    ref = nd.ref
-                    if ref in needed and ref not in net.ordinary:
-                        if info is None:
-                            info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
-                        net.ordinary[ref] = info
-    except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
-        # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
-        raise _format_error(src, exc) from None
+                tags = {t.k: t.v for t in w.tags}
+                ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
+                for ref, lat, lon in pts:
+                    coords[ref] = (lat, lon)
+            needed = {n for w in ways.values() for n in w.nodes}
+            # 2. ordinary roads touching the network (exits) and the ele of network nodes
+            if ways:
+                second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
+                    .with_filter(osmium.filter.KeyFilter("highway", "ele"))
+                for o in second:
+                    if o.is_node():
+                        if "ele" in o.tags and o.id in needed:
+                            ele = _ele(o.tags["ele"])
+                            if ele is None:
+                                log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
+                            else:
+                                net.elevation[o.id] = ele
+                        continue
+                    hw = o.tags.get("highway")
+                    if hw is None or hw in highways:
+                        continue
+                    info = None
+                    for nd in o.nodes:
+                        ref = nd.ref
+                        if ref in needed and ref not in net.ordinary:
+                            if info is None:
+                                info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
+                            net.ordinary[ref] = info
+        except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
+            # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
+            raise _format_error(src, exc) from None
     missing = [(wid, n) for wid, w in ways.items() for n in w.nodes if n not in coords]
     missing.sort()
     net.ways, net.coords = ways, coords

@@ -9,6 +9,7 @@ rule import_city:
         directory("results/topology/{city}"),
     log:
         "logs/topology/{city}.log",
+    threads: 2
     conda:
         "../envs/flyover.yaml"
     params:

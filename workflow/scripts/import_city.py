@@ -1,4 +1,5 @@
 """Rule import_city: every file of one city → topology GraphML files + index."""
+import dataclasses
 import logging
 
 from flyover.osm import OsmOptions
@@ -10,7 +11,9 @@ index = import_city(
     snakemake.params.city,
     snakemake.input,
     snakemake.output[0],
-    osm_options=OsmOptions.from_config({"osm": snakemake.params.osm}),
+    # the rule's threads build the places of a large OSM extract in parallel (same result)
+    osm_options=dataclasses.replace(OsmOptions.from_config({"osm": snakemake.params.osm}),
+                                    workers=max(1, int(snakemake.threads))),
 )
 logging.getLogger("import_city").info(
     "%s: %d interchanges, %d rejected",
