@@ -102,11 +102,13 @@ def test_gore_shoulder_opens_from_zero_width_inside_the_junction(tmp_path):
 
 @pytest.fixture(scope="module")
 def sample(tmp_path_factory, clients_python):
-    """One T (the designs whose conversion crashed) through every client, verifier included."""
+    """One T (the designs whose conversion crashed) through every client but CommonRoad's map
+    verifier (10-150 s an interchange: it runs on every design in
+    :func:`test_every_catalog_design_passes_every_client`, marked slow)."""
     tmp = tmp_path_factory.mktemp("clients")
     g, path = _write(tmp, "semidirectional_t")
     [answer] = run_clients([{"xodr": path, "commonroad": tmp / "map.cr.xml",
-                             "lanelet2": tmp / "map.osm", "verify": True, "routing": True,
+                             "lanelet2": tmp / "map.osm", "verify": False, "routing": True,
                              "pyopendrive": True, "pyxodr": True}], python=clients_python)
     return g, path, answer
 
@@ -129,16 +131,6 @@ def test_lanelet2_routes_exactly_the_movements_of_the_topology(sample):
     routed = routed_movements(a["lanelet2"], read_xodr(path))
     assert set(routed) == set(movements(g))
     assert all(n > 0 for n in routed.values())
-
-
-def test_verifier_reports_only_tolerance_errors_that_our_geometry_does_not_have(sample):
-    _, path, a = sample
-    v = a["verifier"]
-    assert v["ok"], v
-    assert set(v["errors"]) <= TOLERANCE_TYPES, v["errors"]
-    worst = max(gap for *_, gap in link_gaps(read_xodr(path)))
-    assert worst < TOLERANCE_M
-    _bounds_touch_only_at_zero_width(v)
 
 
 def _bounds_touch_only_at_zero_width(verifier):
@@ -193,6 +185,7 @@ def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name
                         "pyopendrive": True, "pyxodr": True}], python=clients_python)
     assert a["conversion"]["ok"], a["conversion"]
     assert a["commonroad"]["ok"] and a["lanelet2"]["ok"] and a["lanelet2"]["routing_errors"] == []
+    assert a["verifier"]["ok"], a["verifier"]
     assert set(a["verifier"]["errors"]) <= TOLERANCE_TYPES, a["verifier"]["errors"]
     assert max(gap for *_, gap in link_gaps(read_xodr(path))) < TOLERANCE_M
     _bounds_touch_only_at_zero_width(a["verifier"])
