@@ -15,8 +15,6 @@ import time
 import traceback
 import warnings
 
-warnings.filterwarnings("ignore")
-logging.disable(logging.WARNING)
 
 
 def _failure(e):
@@ -243,6 +241,10 @@ def run(job):
 
 
 def main():
+    # the clients' own chatter, silenced in this process only (pytest imports this module
+    # for its doctests: a module-level logging.disable silenced every test after it)
+    warnings.filterwarnings("ignore")
+    logging.disable(logging.WARNING)
     request = json.load(sys.stdin)
     out = sys.stdout
     for job in request["jobs"]:
