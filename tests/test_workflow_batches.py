@@ -165,8 +165,8 @@ def test_an_interrupted_run_resumes_and_gives_the_same_bytes(reference, tmp_path
         run = subprocess.Popen([*SNAKEMAKE, "-d", str(wd), "-j2"], cwd=wd,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True)
-        geometry = wd / "results" / "interchanges"
-        _wait_for(lambda: any(geometry.rglob("geometry.json")))
+        # while a geometry job runs (its batch writes the interchanges' files as it goes)
+        _wait_for(lambda: bool(_job_pids(f"{wd}/.snakemake/scripts/.*geometry_class")))
         os.killpg(run.pid, signal.SIGINT)
         if run.wait(timeout=120) != 0:
             break
