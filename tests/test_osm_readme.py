@@ -15,11 +15,11 @@ import logging
 import os
 from pathlib import Path
 
-import numpy as np
 import osmium
 import pytest
 
 from flyover.osm import OsmOptions, read_osm_topologies
+from flyover.osm.geom import turn_deg
 from flyover.topology import class_id
 from flyover.topology.catalog import catalog_class_names
 
@@ -55,17 +55,6 @@ NOT_YET = {
     "26_us_dc_i66_us50_e_st_expwy": "read as 6 legs: the ref-less Potomac Freeway south takes ref I 66 from "
                                     "its opposite carriageway and becomes a second I-66 (patterns 2, 6)",
 }
-
-
-def turn_deg(xy) -> float:
-    """Total signed heading change along a polyline, in degrees (absolute value)."""
-    xy = np.asarray(xy, float).reshape(-1, 2)
-    d = np.diff(xy, axis=0)
-    d = d[np.hypot(*d.T) > 0.5]
-    if len(d) < 2:
-        return 0.0
-    da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
-    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
 
 
 def reading(topologies) -> list[tuple[int, int, str | None]]:

@@ -42,7 +42,8 @@ import numpy as np
 from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
 from flyover.osm.driving_side import driving_side_at
-from flyover.osm.geom import LocalProjection, arclength, bearing_letter, min_radius, point_at, segment_distances
+from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at,
+                              segment_distances, turn_deg)
 from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
 from flyover.topology.names import MAX_NAME_LENGTH, safe_name
@@ -433,13 +434,7 @@ class _RoadGroup:
 
 def _turn_deg(nw: "_Network", nodes) -> float:
     """Total heading change along a way's nodes (degrees, absolute)."""
-    xy = np.array([nw.xy[n] for n in nodes if n in nw.xy]).reshape(-1, 2)
-    d = np.diff(xy, axis=0)
-    d = d[np.hypot(*d.T) > 0.5]
-    if len(d) < 2:
-        return 0.0
-    da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
-    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
+    return turn_deg([nw.xy[n] for n in nodes if n in nw.xy])
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LocalProjection", "arclength", "point_at", "min_radius", "segment_distances", "bearing_letter"]
+__all__ = ["LocalProjection", "arclength", "point_at", "min_radius", "segment_distances", "bearing_letter",
+           "turn_deg"]
 
 _EARTH_RADIUS_M = 6_371_008.8
 
@@ -89,3 +90,15 @@ def bearing_letter(v: np.ndarray) -> str:
     """Compass letter (N, E, S, W) of a direction vector (x east, y north)."""
     ang = np.degrees(np.arctan2(v[0], v[1])) % 360.0
     return "NESW"[int(((ang + 45.0) % 360.0) // 90.0)]
+
+
+def turn_deg(xy) -> float:
+    """Total signed heading change along a polyline ``(n, 2)``, in degrees (absolute value);
+    steps shorter than 0.5 m are skipped."""
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    d = np.diff(xy, axis=0)
+    d = d[np.hypot(*d.T) > 0.5]
+    if len(d) < 2:
+        return 0.0
+    da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
+    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
