@@ -59,37 +59,32 @@ def _connection_gaps(network, locations_of):
     """
     import numpy as np
 
-    out = {}
-    for key, locations in locations_of.items():
-        if key not in ("connections_predecessor", "connections_successor"):
-            continue
-        worst = 0.0
+    def pairs(locations):  # the flagged lanelet pairs that the network still has
         for loc in locations:
             a = network.find_lanelet_by_id(int(loc[0]))
             b = network.find_lanelet_by_id(int(loc[1]))
-            if a is None or b is None:
-                continue
-            first, second = (b, a) if key == "connections_predecessor" else (a, b)
-            gap = max(float(np.linalg.norm(first.left_vertices[-1] - second.left_vertices[0])),
-                      float(np.linalg.norm(first.right_vertices[-1] - second.right_vertices[0])))
-            worst = max(worst, gap)
-        out[key] = worst
-    for key, locations in locations_of.items():
-        if "forking_adj" not in key and "merging_adj" not in key:
-            continue
+            if a is not None and b is not None:
+                yield a, b
+
+    def connection_gap(key, a, b):
+        first, second = (b, a) if key == "connections_predecessor" else (a, b)
+        return max(float(np.linalg.norm(first.left_vertices[-1] - second.left_vertices[0])),
+                   float(np.linalg.norm(first.right_vertices[-1] - second.right_vertices[0])))
+
+    def adjacency_gap(key, a, b):
         # a lanelet that forks from (merges into) its neighbour: at its start (end) its
         # boundary ends should lie on the neighbour's; the distance they are apart
         at = 0 if "forking" in key else -1
-        worst = 0.0
-        for loc in locations:
-            a = network.find_lanelet_by_id(int(loc[0]))
-            b = network.find_lanelet_by_id(int(loc[1]))
-            if a is None or b is None:
-                continue
-            d = min(float(np.linalg.norm(p - q)) for p in (a.left_vertices[at], a.right_vertices[at])
-                    for q in (b.left_vertices[at], b.right_vertices[at]))
-            worst = max(worst, d)
-        out[key] = worst
+        return min(float(np.linalg.norm(p - q)) for p in (a.left_vertices[at], a.right_vertices[at])
+                   for q in (b.left_vertices[at], b.right_vertices[at]))
+
+    out = {}
+    for measure, wanted in ((connection_gap, lambda k: k in ("connections_predecessor",
+                                                             "connections_successor")),
+                            (adjacency_gap, lambda k: "forking_adj" in k or "merging_adj" in k)):
+        for key, locations in locations_of.items():
+            if wanted(key):
+                out[key] = max((measure(key, a, b) for a, b in pairs(locations)), default=0.0)
     return out
 
 
