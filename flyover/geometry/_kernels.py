@@ -8,9 +8,9 @@ meet an obstacle at the same level (closer than ``clearance`` in height):
   half width;
 * a sample of an already fitted ramp closer than the two half widths.
 
-Ramp samples sit in a uniform grid (:func:`grid`, cells at least twice the
-largest reach, with their height ranges), so a stretch looks only at the cells
-next to its box whose heights come within the clearance of its own.
+Ramp samples sit in a uniform grid (:func:`grid`, with the cells' height
+ranges), so a stretch looks only at the cells within the largest reach of its
+box whose heights come within the clearance of its own.
 Between two samples a candidate's lane centre is a straight stretch (height and
 station linear along it), tested exactly against road bands and obstacle ramp
 points (which lie at most :data:`STEP_M` apart), so that a crossing cannot slip
@@ -136,7 +136,7 @@ def _band_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, row, s_lo,
 
 @njit(cache=True, inline="always")
 def _points_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, px, py, pz, phw, starts,
-                  x0, y0, cell, nx, ny, zlo, zhi, s_lo, s_hi):  # pragma: no cover - compiled
+                  x0, y0, cell, reach, nx, ny, zlo, zhi, s_lo, s_hi):  # pragma: no cover - compiled
     """How deep the stretch ``a + t (b - a)``, ``t0 <= t <= 1``, gets into the obstacle
     ramps' lanes (0: clear), counting only points with stations in ``(s_lo, s_hi)``.
 
@@ -152,11 +152,12 @@ def _points_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, px, py, pz,
         return 0.0
     ex, ey, ez = xb - xa, yb - ya, zb - za
     l2 = ex * ex + ey * ey
-    # cells are at least twice the reach wide: the cells next to the stretch's box
-    gx0 = max(int(np.floor((min(xa, xb) - x0) / cell)) - 1, 0)
-    gx1 = min(int(np.floor((max(xa, xb) - x0) / cell)) + 1, nx - 1)
-    gy0 = max(int(np.floor((min(ya, yb) - y0) / cell)) - 1, 0)
-    gy1 = min(int(np.floor((max(ya, yb) - y0) / cell)) + 1, ny - 1)
+    # a point the stretch passes within reach of lies within ``reach`` of its box: only the
+    # cells that overlap the box widened by ``reach`` are looked at
+    gx0 = max(int(np.floor((min(xa, xb) - reach - x0) / cell)), 0)
+    gx1 = min(int(np.floor((max(xa, xb) + reach - x0) / cell)), nx - 1)
+    gy0 = max(int(np.floor((min(ya, yb) - reach - y0) / cell)), 0)
+    gy1 = min(int(np.floor((max(ya, yb) + reach - y0) / cell)), ny - 1)
     z_lo, z_hi = min(za, zb), max(za, zb)
     deep = 0.0
     for ix in range(gx0, gx1 + 1):
@@ -165,6 +166,8 @@ def _points_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, px, py, pz,
             if z_lo - zhi[c] >= clearance or zlo[c] - z_hi >= clearance:
                 continue
             for j in range(starts[c], starts[c + 1]):
+                if z_lo - pz[j] >= clearance or pz[j] - z_hi >= clearance:
+                    continue  # never within the clearance in height (the test below, cheaper)
                 dx, dy = xa - px[j], ya - py[j]
                 r2 = (hw + phw[j]) ** 2 + _ALONG2
                 dd = dx * dx + dy * dy
@@ -194,7 +197,7 @@ def _points_depth(xa, ya, za, sa, xb, yb, zb, sb, t0, hw, clearance, px, py, pz,
 
 @njit(cache=True, nogil=True)
 def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
-              px, py, pz, phw, starts, x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover - compiled
+              px, py, pz, phw, starts, x0, y0, cell, reach, nx, ny, zlo, zhi):  # pragma: no cover - compiled
     """Conflicting inner samples per candidate ``(P,)`` from samples ``(P, N)``, and
     how deep they are in (``(P,)``, metres summed over the conflicting samples).
 
@@ -208,7 +211,9 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
     penalty inside a conflict, which the count alone leaves flat. ``px, py, pz,
     phw``: obstacle ramp samples sorted by grid cell (``starts`` per cell, see
     :func:`grid`; ``zlo, zhi`` their height range per cell, :func:`cell_heights`);
-    they should lie no more than :data:`STEP_M` apart along their ramps.
+    they should lie no more than :data:`STEP_M` apart along their ramps. ``reach``:
+    at least ``hw + phw + STEP_M / 2`` for every point (the cells within it of a
+    stretch are the ones looked at).
     """
     p_count, n = cx.shape
     out = np.zeros(p_count, np.int64)
@@ -227,7 +232,7 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
                 deep = max(deep, _points_depth(cx[p, a], cy[p, a], z[p, a], s[p, a],
                                                cx[p, i], cy[p, i], z[p, i], s[p, i], t0, hw,
                                                clearance, px, py, pz, phw, starts, x0, y0,
-                                               cell, nx, ny, zlo, zhi, end_zone, hi_s))
+                                               cell, reach, nx, ny, zlo, zhi, end_zone, hi_s))
             if deep > 0.0:
                 out[p] += 1
                 depth[p] += deep
@@ -359,19 +364,19 @@ def _scratch(m, n):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za, zc, zb, grade, transition,
                     cx, cy, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover - compiled
+                    x0, y0, cell, reach, nx, ny, zlo, zhi):  # pragma: no cover - compiled
     """One candidate's conflicting samples and their depth (:func:`conflicts`) on its
     lane centre (:func:`_lane`; ``ss`` its stations as row 0)."""
     _lane(xs, ys, tx, ty, sp, ss[0], length, width, za, zc, zb, grade, transition, cx, cy, zz)
     ln[0] = length
     c, d = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw,
-                     starts, x0, y0, cell, nx, ny, zlo, zhi)
+                     starts, x0, y0, cell, reach, nx, ny, zlo, zhi)
     return c[0], d[0]
 
 
 @njit(cache=True, nogil=True)
 def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, clearance,
-                 lines, px, py, pz, phw, starts, x0, y0, cell, nx, ny, zlo, zhi):  # pragma: no cover
+                 lines, px, py, pz, phw, starts, x0, y0, cell, reach, nx, ny, zlo, zhi):  # pragma: no cover
     """Everything the ramp objective measures on candidate splines ``ctrl`` ``(P, n, 4, 2)``.
 
     Samples each cubic piece at ``m`` parameter values (as
@@ -393,7 +398,7 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
         conf[p], deep[p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, r[0], width, za[p], zc[p],
                                            zb[p], grade, transition, cx, cy, zz, ln, end_zone,
                                            hw, clearance, lines, px, py, pz, phw, starts, x0,
-                                           y0, cell, nx, ny, zlo, zhi)
+                                           y0, cell, reach, nx, ny, zlo, zhi)
     return out[0], out[1], out[2], out[3], out[4], out[5], conf, deep
 
 
@@ -539,7 +544,7 @@ def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
                     z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, nx, ny, zlo, zhi, weights, bound):  # pragma: no cover - compiled
+                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound):  # pragma: no cover - compiled
     """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
@@ -605,7 +610,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
         out[7, p], out[8, p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za[p],
                                                zc[p], zb[p], g, transition, cx, cy, zz, ln,
                                                end_zone, hw, clearance, lines, px, py, pz, phw,
-                                               starts, x0, y0, cell, nx, ny, zlo, zhi)
+                                               starts, x0, y0, cell, reach, nx, ny, zlo, zhi)
     return out
 
 

@@ -61,6 +61,8 @@ log = logging.getLogger(__name__)
 
 #: shortest lead (m): a lead is always a real straight piece, never a degenerate one
 LEAD_MIN_M = 1.0
+#: narrowest cell (m) of the grid the conflict kernel buckets obstacle ramp points in
+MIN_CELL_M = 6.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,8 +135,10 @@ class Obstacles:
     owner: tuple[str, ...] = ()
     line_names: tuple[str, ...] = ()
 
-    def grid(self, cell: float) -> tuple:
-        """:attr:`points` bucketed in cells of side ``cell`` for the conflict kernel (cached)."""
+    def grid(self, cell: float, reach: float | None = None) -> tuple:
+        """:attr:`points` bucketed in cells of side ``cell`` for the conflict kernel (cached
+        per cell size). ``reach``: how far (m) from a stretch of lane centre a point can be
+        met (default: half a cell); the kernel looks at the cells within it."""
         cache = self.__dict__.setdefault("_grids", {})
         if cell not in cache:
             order, starts, x0, y0, nx, ny = _kernels.grid(self.points, cell)
@@ -144,7 +148,8 @@ class Obstacles:
                            np.ascontiguousarray(self.half_width[order], float),
                            starts, x0, y0, float(cell), nx, ny,
                            *_kernels.cell_heights(z, starts))
-        return cache[cell]
+        g = cache[cell]
+        return g[:8] + (float(0.5 * cell if reach is None else reach),) + g[8:]
 
 
 @dataclass(frozen=True)
@@ -307,10 +312,15 @@ def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
 def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) -> tuple:
     """The conflict kernel's arguments for one ramp: half width, clearance, roads, ramp grid."""
     hw = 0.5 * spec.width_m - settings.margin_m
-    reach = hw + (float(obstacles.half_width.max()) if len(obstacles.half_width) else 0.0)
-    # the kernel looks at the 2 x 2 cells nearest a point: cells twice the reach (widened
-    # by half the obstacles' point spacing) wide
-    grid = obstacles.grid(float(max(10.0, np.ceil(2.0 * (reach + 0.5 * _kernels.STEP_M)))))
+    # how far from the lane centre an obstacle point can be met: the two half widths,
+    # widened by half the points' spacing (the kernel's reach is sqrt((hw + phw)^2 +
+    # (STEP_M / 2)^2), never more than this)
+    reach = hw + (float(obstacles.half_width.max()) if len(obstacles.half_width) else 0.0) \
+        + 0.5 * _kernels.STEP_M
+    # cells about as wide as the reach: a stretch looks at ~3 x 3 of them (cells twice the
+    # reach, 2 x 2 of them, hold about twice the points to test); no narrower than
+    # MIN_CELL_M, so that a large interchange's grid stays small
+    grid = obstacles.grid(float(max(MIN_CELL_M, np.ceil(reach))), reach)
     lines = np.ascontiguousarray(obstacles.lines, float).reshape(-1, 9)
     return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
 
