@@ -23,6 +23,7 @@ judges the union of runs on renditions of one interchange in several versions.
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import os
@@ -124,9 +125,14 @@ def setup_qc_venv(path: str | os.PathLike | None = None) -> Path:
 def schema_dir(python: Path | None = None) -> Path:
     """The folder of ASAM OpenDRIVE XSDs bundled with the checker (``1.7.0/...``).
 
-    Located without importing the checker (whose import takes about a second).
+    Located without importing the checker (whose import takes about a second), once per
+    process and checker environment (a validation batch asks for every file).
     """
-    py = python or find_qc_python()
+    return _schema_dir(python or find_qc_python())
+
+
+@functools.lru_cache(maxsize=None)
+def _schema_dir(py: Path) -> Path:
     res = subprocess.run(
         [str(py), "-c", "import importlib.util, os; s = importlib.util.find_spec('qc_opendrive'); "
                         "print(os.path.join(s.submodule_search_locations[0], 'schema'))"],
