@@ -9,8 +9,8 @@ Steps (each survives messy data with a logged reason):
 2. **Snapping.** A link end that touches neither the network nor an ordinary
    road and lies within ``snap_tolerance_m`` of a carriageway is joined to it.
 3. **Connectors tagged motorway.** A short ``motorway`` stretch without ``ref``
-   fed only by links (or feeding only links, or forking off a carriageway) is
-   treated as a link.
+   fed only by links (or feeding only links, or forking off a carriageway), or a
+   chain of them that leaves one carriageway and joins another, is treated as a link.
 4. **Pruning.** Links not on a carriageway-to-carriageway path (exits to
    ordinary roads) are dropped unless ``keep_exits``.
 5. **Stretches.** The network is cut at every diverge and merge; road
@@ -359,6 +359,46 @@ class _Network:
                 why = "fed by links" if fed_by_links else "feeding links" if feeds_links else "forking"
                 self.quirk(f"way(s) {', '.join(map(str, st.ways))}: tagged motorway without ref, "
                            f"{st.length:.0f} m, {why}: treated as motorway_link")
+        self._reclassify_crossovers()
+
+    def _reclassify_crossovers(self) -> None:
+        """A ``motorway`` chain without ref that leaves one carriageway where that one goes on
+        (a diverge) and joins another where that one goes on (a merge), up to
+        ``connector_max_length_m`` long, is a connector between two roads: a link (Sydney's
+        Cahill Expressway → Western Distributor roadway tagged ``motorway``). The chain may pass
+        nodes where only links branch off."""
+        by_start: dict[int, list[_Stretch]] = defaultdict(list)
+        stretches = self.build_stretches()
+        for st in stretches:
+            by_start[st.start].append(st)
+
+        def road_outs(n):
+            return [s for s in self.succ[n] if self.seg_cls(n, s) == ROAD]
+
+        def road_ins(n):
+            return [p for p in self.pred[n] if self.seg_cls(p, n) == ROAD]
+
+        for st in stretches:
+            if st.cls != ROAD or len(road_outs(st.start)) < 2 or not road_ins(st.start):
+                continue
+            chain, length, cur = [st], st.length, st
+            while len(road_ins(cur.end)) == 1 and len(road_outs(cur.end)) == 1:
+                nxt = [s for s in by_start[cur.end] if s.cls == ROAD]
+                if len(nxt) != 1 or nxt[0] in chain:
+                    break
+                cur = nxt[0]
+                chain.append(cur)
+                length += cur.length
+                if length > self.opt.connector_max_length_m:
+                    break
+            ways = list(dict.fromkeys(w for c in chain for w in c.ways if self.cls[w] == ROAD))
+            if (length > self.opt.connector_max_length_m or len(road_ins(cur.end)) < 2
+                    or not road_outs(cur.end) or any(self.ref[w] for w in ways)):
+                continue
+            for w in ways:
+                self.cls[w] = LINK
+            self.quirk(f"way(s) {', '.join(map(str, ways))}: tagged motorway without ref, {length:.0f} m, "
+                       "leaves one carriageway and joins another: treated as motorway_link")
 
     def extend_cut_carriageways(self) -> None:
         """A carriageway tagged ``motorway_link`` past the interchange that leaves the extract
@@ -387,6 +427,13 @@ class _Network:
                     self.quirk(f"link way(s) {', '.join(map(str, changed))} named like a carriageway "
                                f"({self.net.ways[changed[0]].tag('name')}) leave the extract: read as "
                                "that carriageway")
+
+    def note_dead_ends(self) -> None:
+        """The nodes where the network as read (before pruning) begins or ends: nothing comes
+        in (``dead_in``) or goes on (``dead_out``); a motorway that ends there ends on the map
+        (at ordinary roads or the extract's edge), not into links. For the self-check."""
+        self.dead_in = {n for n, s in self.succ.items() if s and not self.pred.get(n)}
+        self.dead_out = {n for n, p in self.pred.items() if p and not self.succ.get(n)}
 
     # -- 4. pruning -------------------------------------------------------
     def prune_links(self) -> None:
@@ -435,6 +482,23 @@ class _RoadGroup:
 def _turn_deg(nw: "_Network", nodes) -> float:
     """Total heading change along a way's nodes (degrees, absolute)."""
     return turn_deg([nw.xy[n] for n in nodes if n in nw.xy])
+
+
+def _opposite_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Least distance (m) from a vertex of polyline ``a`` to a segment of ``b`` running the
+    other way there (cosine of the directions below -0.5); ``inf`` if nowhere."""
+    da = np.diff(a, axis=0)
+    da = np.vstack([da, da[-1:]])  # the direction at each vertex: of its outgoing segment
+    db = np.diff(b, axis=0)
+    pb, qb = b[:-1], b[1:]
+    best = float("inf")
+    for p, d in zip(a, da):
+        dist, _ = segment_distances(p, pb, qb)
+        cos = (db @ d) / np.maximum(np.hypot(*db.T) * float(np.hypot(*d)), 1e-9)
+        dist = dist[cos < -0.5]
+        if len(dist):
+            best = min(best, float(dist.min()))
+    return best
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -573,8 +637,35 @@ class _Builder:
                 g.corridor = name.get(g.corridor, g.corridor)
 
     def _fill_missing_refs(self) -> None:
+        self._pair_named_carriageways()
         self._pair_missing_refs(with_ref=True)
         self._pair_missing_refs(with_ref=False)
+
+    def _names(self, g: _RoadGroup) -> set[str]:
+        return {n for w in g.ways if (n := self.nw.net.ways[w].tag("name"))}
+
+    def _pair_named_carriageways(self) -> None:
+        """Two carriageways without ref that share a name and run opposite to each other
+        within 150 m somewhere (compared where they are closest, so that one may turn away, as
+        the Cahill Expressway does) are one corridor, before any ref is taken from an opposite
+        carriageway of another name or of another road that runs beside them."""
+        free = [g for g in self.groups if g.corridor is None and len(g.xy) > 1]
+        names = {g.gid: self._names(g) for g in free}
+        for g in free:
+            if g.corridor is not None or not names[g.gid]:
+                continue
+            best, best_d = None, 150.0
+            for h in free:
+                if h is g or h.corridor is not None or not names[g.gid] & names[h.gid]:
+                    continue
+                d = _opposite_distance(g.xy, h.xy)
+                if d < best_d:
+                    best, best_d = h, d
+            if best is not None:
+                g.corridor = best.corridor = f"way{min(g.ways + best.ways)}"
+                self.nw.quirk(f"carriageways way(s) {g.ways[:3]} and {best.ways[:3]} without ref, both named "
+                              f"{sorted(names[g.gid] & names[best.gid])[0]}, opposite and {best_d:.0f} m "
+                              f"apart: corridor named {g.corridor}")
 
     def _pair_missing_refs(self, with_ref: bool) -> None:
         """Give a carriageway without ref its opposite carriageway's ref (``with_ref``),
@@ -1006,8 +1097,9 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     nw = _Network(net, options)
     nw.add_ways()
     nw.snap_dangling_links()
-    nw.reclassify_connectors()
     nw.extend_cut_carriageways()
+    nw.reclassify_connectors()
+    nw.note_dead_ends()
     if not options.keep_exits:
         nw.prune_links()
     b = _Builder(nw)
@@ -1153,7 +1245,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             lo, hi = window[road[1]]
             pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
         conns.append(Connection(nid(src), nid(dst), label, pos))
-    roads, node_attrs, lines, carriageways = [], {}, {}, {}
+    roads, node_attrs, lines, carriageways, dead_ends = [], {}, {}, {}, {}
     junction_xy = np.array([nw.xy[n] for n in junction_nodes])
     ring_centre = junction_xy.mean(axis=0)
     ring_radius = float(np.hypot(*(junction_xy - ring_centre).T).max()) + RING_MARGIN_M + 50.0
@@ -1173,6 +1265,15 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         near = np.hypot(*(grp.xy - ring_centre).T) <= ring_radius
         near = near | np.concatenate([near[1:], [False]]) | np.concatenate([[False], near[:-1]])
         carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach & near]).round(1).tolist()
+        first, last = b.st[grp.stretches[0]].start, b.st[grp.stretches[-1]].end
+        # where nothing goes on on the map (a stub ending at ordinary roads, the extract's edge)
+        total = float(cum[-1])
+        for n, kind, dead, s_in in ((first, "in", nw.dead_in, min(_PROBE_M, total)),
+                                    (last, "out", nw.dead_out, max(total - _PROBE_M, 0.0))):
+            if n in dead:  # with the way the road would go on, outward
+                out = _unit(nw.xy[n] - point_at(grp.xy, s_in))
+                dead_ends[(n, kind)] = [*nw.unmirrored(nw.xy[n])[0].round(1).tolist(),
+                                        *nw.unmirrored(out)[0].round(4).tolist(), kind]
     for n in local_nodes:
         tags = net.ordinary.get(n, {})
         label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
@@ -1209,6 +1310,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
                       for src, dst, label, n in edges],
         "driving_side": nw.side,
         "carriageways": carriageways,
+        "dead_ends": [dead_ends[k] for k in sorted(dead_ends)],
         "quirks": list(nw.quirks),
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }
