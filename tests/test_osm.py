@@ -321,6 +321,40 @@ def test_two_interchanges_sharing_a_carriageway_are_separate(tmp_path):
     assert {tuple(t.expressways) for t in ts} == {("A1", "B2"), ("A1", "C3")}
 
 
+def three_motorways(dy=0.0):
+    """A 1 (north-south) and B 2 (east-west) cross; C 3 comes from the east at y≈150 (``dy``
+    further north) and ends at x=400. Every ramp joins two motorways and meets no other ramp:
+    A1 → B1 (the cloverleaf's outer ramp), C westbound → A1, A1 → C eastbound and, with C
+    where it is (``dy`` = 0), B1 → C eastbound (350 m after C eastbound begins: not a
+    trumpet stem's merge)."""
+    ways = cross_roads(yhi=1500 + dy) + [
+        carriageway(shift([(1500, 165), (400, 165)], dy=dy), "C 3"),
+        carriageway(shift([(400, 135), (1500, 135)], dy=dy), "C 3"),
+        way(OUTER),                                                      # A – B
+        way(shift([(400, 165), (200, 180), (60, 270), (15, 370)], dy=dy)),  # C – A
+        way(shift([(15, 50), (60, 90), (200, 125), (400, 135)], dy=dy)),    # A – C
+    ]
+    if dy == 0:
+        ways.append(way([(650, -15), (700, 20), (740, 100), (750, 135)]))  # B – C
+    return ways
+
+
+def test_links_touching_three_motorways_close_together_are_one_interchange(tmp_path):
+    """Pattern 2 of issue 23: the A–B, A–C and B–C ramps of a system interchange never meet one
+    another (three link groups, each of two motorways); close together they are one interchange
+    of three motorways, not three pairwise ones."""
+    t = only(write_osm(tmp_path / "system.osm", three_motorways()))
+    assert set(t.expressways) == {"A1", "B2", "C3"}
+    assert t.n_ramps == 4 and t.n_roads == 4  # A1, B1 and C's two carriageways have ramps
+    assert t.legs == 5  # A and B pass through, C ends
+
+
+def test_three_motorways_far_apart_stay_pairwise_interchanges(tmp_path):
+    """A–B and A–C ramps 1 km apart along A 1 (sharing only A 1) stay two interchanges."""
+    ts = read_osm_topologies(write_osm(tmp_path / "apart.osm", three_motorways(dy=1000.0)), OsmOptions())
+    assert sorted(tuple(sorted(t.expressways)) for t in ts) == [("A1", "B2"), ("A1", "C3")]
+
+
 # -- reading, names, outputs --------------------------------------------------------
 
 def test_reader_keeps_only_the_motorway_network(tmp_path):

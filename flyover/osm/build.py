@@ -25,9 +25,10 @@ Steps (each survives messy data with a logged reason):
    merging ramp gets ``In-L``/``In-R``); ramps that all end at a merge feed a
    new ramp node (``In-L``/``In-R``), as in the catalog's stack.
 7. **Interchanges.** Link components joining ≥ 2 corridors (by ``ref``,
-   falling back to geometry), clustered when they share two corridors and lie
-   within ``cluster_distance_m``; two interchanges sharing one carriageway stay
-   separate.
+   falling back to geometry), clustered by :func:`flyover.osm.cluster.cluster_link_groups`:
+   sharing two corridors within ``cluster_distance_m``, or one corridor (a system
+   interchange of three or more motorways) within half of it; interchanges further
+   apart along one motorway stay separate.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ import numpy as np
 
 from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
+from flyover.osm.cluster import cluster_link_groups
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at,
                               segment_distances, turn_deg)
@@ -993,9 +995,6 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
     return sorted(out, key=lambda t: t.name)
 
 
-#: link groups of the same two corridors joined to a same carriageway cluster up to this times ``cluster_distance_m``
-_SHARED_CARRIAGEWAY_FACTOR = 2.0
-
 #: how far (m) beyond its first and last junction a carriageway is kept for the self-check
 _CHECK_REACH_M = 1500.0
 
@@ -1152,19 +1151,9 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
                 nw.ignored.setdefault(w, f"joins only corridor {sorted(map(str, corridors(ci)))}")
             nw.quirk(f"link way(s) {ways} join only corridor {sorted(map(str, corridors(ci)))}: "
                      "not a motorway-to-motorway interchange")
-    close = []
-    for x, ci in enumerate(multi):
-        for cj in multi[x + 1:]:
-            if len(corridors(ci) & corridors(cj)) < 2:
-                continue
-            pi, pj = points(ci), points(cj)
-            d = np.sqrt(((pi[:, None, :] - pj[None, :, :]) ** 2).sum(-1)).min()
-            # joined to a same carriageway (a split or merge without links
-            # a little away from the flyovers): one interchange a little further apart
-            shared = bool(groups(ci) & groups(cj))
-            if d <= options.cluster_distance_m * (_SHARED_CARRIAGEWAY_FACTOR if shared else 1.0):
-                close.append((ci, cj))
-    clusters = _components(multi, close)
+    clusters = [[multi[k] for k in cl] for cl in cluster_link_groups(
+        [corridors(ci) for ci in multi], [groups(ci) for ci in multi], [points(ci) for ci in multi],
+        options.cluster_distance_m)]
     out, failed = [], []
     for cl in clusters:
         cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
