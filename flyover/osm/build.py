@@ -338,6 +338,8 @@ class _Network:
 
     # -- 3. connectors tagged motorway ------------------------------------
     def reclassify_connectors(self) -> None:
+        if not any(c == ROAD and not self.ref[w] for w, c in self.cls.items()):
+            return  # (only a carriageway way without ref can be a connector: most places)
         for st in self.build_stretches():
             if st.cls != ROAD or any(self.ref[w] for w in st.ways):
                 continue
@@ -369,6 +371,8 @@ class _Network:
         ``connector_max_length_m`` long, is a connector between two roads: a link (Sydney's
         Cahill Expressway → Western Distributor roadway tagged ``motorway``). The chain may pass
         nodes where only links branch off."""
+        if not any(len(ss) > 1 and sum(self.seg_cls(n, x) == ROAD for x in ss) > 1 for n, ss in self.succ.items()):
+            return  # (no carriageway splits without a link)
         by_start: dict[int, list[_Stretch]] = defaultdict(list)
         stretches = self.build_stretches()
         for st in stretches:
@@ -408,8 +412,8 @@ class _Network:
         (no ordinary road there) is, from that end on, a carriageway while its ways carry
         the name of a motorway carriageway of the network and run straight (turn < 90°)."""
         names = {self.net.ways[w].tag("name") for w, c in self.cls.items() if c == ROAD} - {None}
-        if not names:
-            return
+        if not any(c == LINK and self.net.ways[w].tag("name") in names for w, c in self.cls.items()):
+            return  # (no link is named like a carriageway)
         for st in self.build_stretches():
             if st.cls != LINK:
                 continue
