@@ -986,7 +986,13 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
             _PARTS = None
             gc.unfreeze()
     else:
-        results = [_build_part_safe(p, options) for p in parts]
+        # the network read so far is not garbage: frozen, the collector's passes while building
+        # do not walk it again and again (as in the forked workers)
+        gc.freeze()
+        try:
+            results = [_build_part_safe(p, options) for p in parts]
+        finally:
+            gc.unfreeze()
     for found, exc in results:
         out += found
         if exc is not None:

@@ -69,7 +69,12 @@ def cluster_link_groups(corridors: Sequence[set], carriageways: Sequence[set], p
             k = parent[k]
         return k
 
+    lo = np.array([p.min(axis=0) for p in points]).reshape(-1, 2)
+    hi = np.array([p.max(axis=0) for p in points]).reshape(-1, 2)
     for i in range(n):
+        # the gap between bounding boxes is at most the least distance: pairs further apart
+        # than their limit are not measured
+        gap = np.hypot(*np.maximum(0.0, np.maximum(lo[i] - hi, lo - hi[i])).T)
         for j in range(i + 1, n):
             shared = len(corridors[i] & corridors[j])
             if shared >= 2:
@@ -79,7 +84,7 @@ def cluster_link_groups(corridors: Sequence[set], carriageways: Sequence[set], p
                 limit = cluster_distance_m * SYSTEM_FACTOR
             else:
                 continue
-            if find(i) != find(j) and _min_distance(points[i], points[j]) <= limit:
+            if gap[j] <= limit and find(i) != find(j) and _min_distance(points[i], points[j]) <= limit:
                 ri, rj = find(i), find(j)
                 parent[max(ri, rj)] = min(ri, rj)
     out: dict[int, list[int]] = defaultdict(list)
