@@ -258,6 +258,25 @@ def test_carriageway_cut_at_the_extract_edge_at_a_diverge(tmp_path):
     assert "extract edge" in notes(t)
 
 
+def test_carriageway_splitting_without_a_link_gets_a_ramp_with_geometry(tmp_path):
+    """B 2's eastbound carriageway leaves A 1 northbound at (15, 0) without a link (a direct
+    split): the ramp joining them runs along B's carriageway from the split while it is within
+    10 m of A's (about 40 m here: B drifts 25 m east per 100 m north), not a point."""
+    ways = cross_roads()[:2] + [
+        carriageway([(15, 0), (40, 100), (200, 300), (1000, 600)], "B 2"),
+        carriageway([(1000, 630), (200, 330), (-15, 100)], "B 2"),
+    ]
+    t = only(write_osm(tmp_path / "direct.osm", ways))
+    lines = t.attrs["osm"]["lines"]
+    direct = [r for r in t.ramps if t.graph.nodes[r]["osm_ways"] == ""]
+    assert len(direct) == 2  # B leaves A1 and B westbound joins A2, both without a link
+    split = next(r for r in direct if any(d["label"] is Label.IN_M for _, _, d in t.graph.out_edges(r, data=True)))
+    attrs = t.graph.nodes[split]
+    assert 35 < attrs["length_m"] < 50 and len(lines[split]) >= 2
+    assert math.hypot(lines[split][0][0] - lines[split][-1][0], lines[split][0][1] - lines[split][-1][1]) \
+        == pytest.approx(attrs["length_m"], rel=0.01)  # a straight piece of B, from the split on
+
+
 def test_ramp_ending_short_of_its_road_is_snapped_within_tolerance(tmp_path):
     ways = cloverleaf_ways()
     pts = ways[4]["points"]  # outer ramp A1 → B1, ends on B1 at (500, -15)

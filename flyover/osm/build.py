@@ -44,7 +44,7 @@ from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
 from flyover.osm.cluster import cluster_link_groups
 from flyover.osm.driving_side import driving_side_at
-from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at,
+from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at, run_beside,
                               segment_distances, turn_deg)
 from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
@@ -718,7 +718,8 @@ class _Builder:
 
     def _direct_edges(self, n: int, ri: list[_Stretch], ro: list[_Stretch]) -> list:
         """Carriageways meeting without a link: a carriageway that begins at a diverge (ends at
-        a merge) of another is joined to it by a ramp of no length, ``("direct", n)``: the
+        a merge) of another is joined to it by a ramp ``("direct", n)`` (its geometry: the branch
+        where it runs beside the through carriageway, :func:`_direct_ramp_line`): the
         through carriageway ``Out-R``/``Out-L`` → ramp → ``In-M`` the branch (branch ``Out-M``
         → ramp → ``In-R``/``In-L`` the through carriageway)."""
         p = self.nw.xy[n]
@@ -1182,6 +1183,30 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     return out
 
 
+#: a carriageway splitting from (merging into) another without a link: its ramp is where it
+#: runs within this distance (m) of the other, at most ``_DIRECT_MAX_M`` long
+_DIRECT_SEPARATION_M = 10.0
+_DIRECT_MAX_M = 300.0
+
+
+def _direct_ramp_line(b: _Builder, edges: list, key: tuple) -> np.ndarray:
+    """The geometry of a ramp ``("direct", node)`` (a carriageway splitting from or merging into
+    another without a link), in the direction of travel: the branch carriageway from (to) the
+    junction while it runs beside the through one (:func:`flyover.osm.geom.run_beside`)."""
+    n = key[1]
+    ends = [(e[0] if e[1] == key else e[1], e[2]) for e in edges if key in e[:2]]
+    branch = next((r for r, lab in ends if lab in (Label.IN_M, Label.OUT_M) and r[0] == "road"), None)
+    through = next((r for r, lab in ends if r != branch and r[0] == "road"), None)
+    if branch is None or through is None:
+        return b.nw.xy[n].reshape(1, 2)
+    grp, other = b.groups[branch[1]], b.groups[through[1]].xy
+    k = int(np.searchsorted(arclength(grp.xy), grp.s_of[n] - 1e-6))
+    splits = any(e[0] == through and e[1] == key for e in edges)
+    if splits:  # the branch from the junction on
+        return run_beside(grp.xy[k:], other, _DIRECT_SEPARATION_M, _DIRECT_MAX_M)
+    return run_beside(grp.xy[:k + 1][::-1], other, _DIRECT_SEPARATION_M, _DIRECT_MAX_M)[::-1]
+
+
 def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     net = nw.net
     road_gids = sorted({k[1] for e in edges for k in e[:2] if k[0] == "road"})
@@ -1283,6 +1308,12 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     for k in ramp_keys:
         rid = ramp_id[k]
         ramps.append(Ramp(rid))
+        if k[0] == "direct":
+            real = _direct_ramp_line(b, edges, k)
+            node_attrs[rid] = {"length_m": round(float(arclength(real)[-1]), 1),
+                               "min_radius_m": round(min_radius(real), 1), "osm_ways": ""}
+            lines[rid] = real.tolist()
+            continue
         if k[0] != "ramp":
             node_attrs[rid] = {"length_m": 0.0, "min_radius_m": float("inf"), "osm_ways": ""}
             lines[rid] = [nw.xy[k[1]].tolist()]

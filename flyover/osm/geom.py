@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["LocalProjection", "arclength", "point_at", "min_radius", "segment_distances", "bearing_letter",
-           "turn_deg"]
+           "turn_deg", "run_beside"]
 
 _EARTH_RADIUS_M = 6_371_008.8
 
@@ -102,3 +102,30 @@ def turn_deg(xy) -> float:
         return 0.0
     da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
     return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
+
+
+def run_beside(line, other, separation_m: float, max_length_m: float) -> np.ndarray:
+    """The beginning of polyline ``line`` while it stays within ``separation_m`` of polyline
+    ``other`` (cut where it leaves, interpolated between vertices), at most ``max_length_m``
+    long: where a carriageway that splits from another without a link runs beside it.
+
+    >>> run_beside([[0, 0], [0, 100], [50, 200]], [[0, 0], [0, 300]], 10.0, 500.0).round(1).tolist()
+    [[0.0, 0.0], [0.0, 100.0], [10.0, 120.0]]
+    """
+    line = np.asarray(line, float).reshape(-1, 2)
+    other = np.asarray(other, float).reshape(-1, 2)
+    if len(line) < 2 or len(other) < 2:
+        return line[:1]
+    cum = arclength(line)
+    d = np.array([segment_distances(p, other[:-1], other[1:])[0].min() for p in line])
+    out = [line[0]]
+    for k in range(1, len(line)):
+        if d[k] > separation_m:
+            t = (separation_m - d[k - 1]) / (d[k] - d[k - 1]) if d[k] > d[k - 1] else 0.0
+            out.append(line[k - 1] + float(np.clip(t, 0.0, 1.0)) * (line[k] - line[k - 1]))
+            break
+        if cum[k] > max_length_m:
+            out.append(point_at(line, max_length_m))
+            break
+        out.append(line[k])
+    return np.array(out)
