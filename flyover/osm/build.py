@@ -43,6 +43,7 @@ import numpy as np
 from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
 from flyover.osm.cluster import cluster_link_groups
+from flyover.osm.corridors import name_corridors
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at, run_beside,
                               segment_distances, turn_deg)
@@ -490,23 +491,6 @@ def _turn_deg(nw: "_Network", nodes) -> float:
     return turn_deg([nw.xy[n] for n in nodes if n in nw.xy])
 
 
-def _opposite_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """Least distance (m) from a vertex of polyline ``a`` to a segment of ``b`` running the
-    other way there (cosine of the directions below -0.5); ``inf`` if nowhere."""
-    da = np.diff(a, axis=0)
-    da = np.vstack([da, da[-1:]])  # the direction at each vertex: of its outgoing segment
-    db = np.diff(b, axis=0)
-    pb, qb = b[:-1], b[1:]
-    best = float("inf")
-    for p, d in zip(a, da):
-        dist, _ = segment_distances(p, pb, qb)
-        cos = (db @ d) / np.maximum(np.hypot(*db.T) * float(np.hypot(*d)), 1e-9)
-        dist = dist[cos < -0.5]
-        if len(dist):
-            best = min(best, float(dist.min()))
-    return best
-
-
 def _unit(v: np.ndarray) -> np.ndarray:
     n = float(np.hypot(*v))
     return v / n if n > 0 else v
@@ -601,104 +585,7 @@ class _Builder:
             self.groups.append(g)
             for c in chain:
                 self.group_of[c] = g.gid
-        self._unify_corridors()
-        self._fill_missing_refs()
-
-    def _unify_corridors(self) -> None:
-        """Refs met along one carriageway (a route joining or leaving, a route number changing)
-        are one corridor, named by the ref covering most length."""
-        parent: dict[str, str] = {}
-
-        def find(r):
-            while parent.setdefault(r, r) != r:
-                r = parent[r]
-            return r
-
-        length = Counter()
-        for g in self.groups:
-            refs = []
-            for c in g.stretches:
-                st = self.st[c]
-                for w in st.ways:
-                    if self.nw.ref[w]:
-                        refs.append(self.nw.ref[w])
-                        length[self.nw.ref[w]] += st.length / len(st.ways)
-            for r in refs[1:]:
-                a, b = find(refs[0]), find(r)
-                if a != b:
-                    parent[max(a, b)] = min(a, b)
-        members = defaultdict(list)
-        for r in list(parent):
-            members[find(r)].append(r)
-        name = {}
-        for rs in members.values():
-            best = max(sorted(rs), key=lambda r: length[r])
-            for r in rs:
-                name[r] = best
-            if len(rs) > 1:
-                self.nw.quirk(f"refs {', '.join(sorted(rs))} follow one another along a carriageway: "
-                              f"one corridor {best}")
-        for g in self.groups:
-            if g.corridor is not None:
-                g.corridor = name.get(g.corridor, g.corridor)
-
-    def _fill_missing_refs(self) -> None:
-        self._pair_named_carriageways()
-        self._pair_missing_refs(with_ref=True)
-        self._pair_missing_refs(with_ref=False)
-
-    def _names(self, g: _RoadGroup) -> set[str]:
-        return {n for w in g.ways if (n := self.nw.net.ways[w].tag("name"))}
-
-    def _pair_named_carriageways(self) -> None:
-        """Two carriageways without ref that share a name and run opposite to each other
-        within 150 m somewhere (compared where they are closest, so that one may turn away, as
-        the Cahill Expressway does) are one corridor, before any ref is taken from an opposite
-        carriageway of another name or of another road that runs beside them."""
-        free = [g for g in self.groups if g.corridor is None and len(g.xy) > 1]
-        names = {g.gid: self._names(g) for g in free}
-        for g in free:
-            if g.corridor is not None or not names[g.gid]:
-                continue
-            best, best_d = None, 150.0
-            for h in free:
-                if h is g or h.corridor is not None or not names[g.gid] & names[h.gid]:
-                    continue
-                d = _opposite_distance(g.xy, h.xy)
-                if d < best_d:
-                    best, best_d = h, d
-            if best is not None:
-                g.corridor = best.corridor = f"way{min(g.ways + best.ways)}"
-                self.nw.quirk(f"carriageways way(s) {g.ways[:3]} and {best.ways[:3]} without ref, both named "
-                              f"{sorted(names[g.gid] & names[best.gid])[0]}, opposite and {best_d:.0f} m "
-                              f"apart: corridor named {g.corridor}")
-
-    def _pair_missing_refs(self, with_ref: bool) -> None:
-        """Give a carriageway without ref its opposite carriageway's ref (``with_ref``),
-        or else pair it with an opposite carriageway also without ref under a geometric name."""
-        for g in self.groups:
-            if g.corridor is not None:
-                continue
-            heading = _unit(g.xy[-1] - g.xy[0])
-            best, best_d = None, 150.0
-            for h in self.groups:
-                if h is g or (h.corridor is None) == with_ref or \
-                        float(np.dot(heading, _unit(h.xy[-1] - h.xy[0]))) > -0.5:
-                    continue
-                d, _ = segment_distances(g.xy[len(g.xy) // 2], h.xy[:-1], h.xy[1:])
-                if d.min() < best_d:
-                    best, best_d = h, float(d.min())
-            if best is not None and with_ref:
-                g.corridor = best.corridor
-                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: ref {best.corridor} "
-                              f"from the opposite carriageway {best_d:.0f} m away")
-            elif best is not None:
-                g.corridor = best.corridor = f"way{min(g.ways + best.ways)}"
-                self.nw.quirk(f"carriageways way(s) {g.ways[:3]} and {best.ways[:3]} without ref, "
-                              f"opposite and {best_d:.0f} m apart: corridor named {g.corridor}")
-            elif not with_ref:
-                g.corridor = f"way{min(g.ways)}"
-                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: corridor named {g.corridor}")
+        name_corridors(self)
 
     # -- junction labels ----------------------------------------------------
     def _probe_out(self, s: _Stretch) -> np.ndarray:
