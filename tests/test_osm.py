@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
+from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import networkx as nx
@@ -432,6 +433,25 @@ def test_import_city_writes_graphml_and_picture(tmp_path):
     name = index["interchanges"][0]["interchange"]
     assert (tmp_path / "out" / f"{name}.graphml").exists() and (tmp_path / "out" / f"{name}.png").exists()
     assert nx.read_graphml(tmp_path / "out" / f"{name}.graphml").number_of_nodes() == 8
+
+
+def test_self_check_rows_are_the_city_notes(tmp_path):
+    """A cloverleaf with one more link that leaves A1, splits, and comes back onto A1 on one
+    branch (to B1 on the other): its self-check says a ramp leaves and joins one carriageway,
+    and the city's index.json carries that row with the file, the interchange and its picture."""
+    from flyover.topology.city import import_city
+
+    back = [way([(15, -1100), (60, -1000), (90, -950)]), way([(90, -950), (60, -850), (15, -750)]),
+            way([(90, -950), (700, -300), (900, -15)])]
+    path = write_osm(tmp_path / "odd.osm", cloverleaf_ways() + back)
+    [t] = read_osm_topologies(path, OsmOptions())
+    rows = t.attrs["osm"]["self_check"]
+    assert [r["check"] for r in rows] == ["ramp"] and "same carriageway" in rows[0]["detail"]
+    index = import_city("odd", [path], tmp_path / "odd")
+    assert len(index["notes"]) == len(rows)
+    for row in index["notes"]:
+        assert row["source_file"] == str(path) and row["interchange"] == t.name
+        assert Path(row["preview"]).is_file() and row["check"] == "ramp" and row["detail"] == rows[0]["detail"]
 
 
 def test_keep_exits_keeps_links_to_ordinary_roads(tmp_path):

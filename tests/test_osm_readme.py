@@ -182,16 +182,16 @@ def test_self_check_flags_a_wrong_leg_count_where_it_used_to_false_alarm(stem, e
     assert [r["check"] for r in self_check(wrong)][:1] == ["legs"]
 
 
-def test_self_check_rows_are_the_city_notes(tmp_path):
+def test_a_city_of_extracts_read_right_has_no_notes(tmp_path):
+    """File 26 reads right (5 legs): its city's index.json has no notes. (That a disagreement
+    becomes a notes row is tested on a synthetic extract in tests/test_osm.py.)"""
     from flyover.topology.city import import_city
 
     src = OSM_DIR / "26_us_dc_i66_us50_e_st_expwy.osm"
     index = import_city("dc", [src], tmp_path / "dc", osm_options=OsmOptions())
     [t] = read_osm_topologies(src, OsmOptions())
-    assert len(index["notes"]) == len(t.attrs["osm"]["self_check"])
-    for row in index["notes"]:
-        assert row["source_file"] == str(src) and row["interchange"] == t.name
-        assert Path(row["preview"]).is_file() and row["check"] in ("legs", "shape", "ramp")
+    assert t.legs == 5 and t.attrs["osm"]["self_check"] == []
+    assert index["notes"] == [] and [r["interchange"] for r in index["interchanges"]] == [t.name]
 
 
 def test_a_ramp_back_onto_its_own_carriageway_is_a_self_check_row():

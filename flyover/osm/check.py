@@ -13,7 +13,7 @@ topology was built:
   one). The topology's legs (:attr:`flyover.topology.Topology.legs`) must be as many.
   Known limit: a leg of two dual carriageways side by side (express and local lanes both
   tagged motorway) counts as two;
-- **ramps**: every ramp is reached from a road and reaches a road (through ramps),
+- **ramps**: every ramp is reached from a road and reaches a road (through ramps only),
   and the two are not one and the same carriageway;
 - **shape**: three legs on the map is a ``T``, four a ``cross``.
 
@@ -125,15 +125,24 @@ def ring_legs(topology: Topology) -> tuple[int, float]:
     return legs, radius
 
 
+def _first_roads(g: nx.DiGraph, start: str, step) -> set[str]:
+    """The roads reached from ramp ``start`` through ramps only (``step``: successors or
+    predecessors): where its traffic comes from or goes to, not what lies beyond those roads."""
+    seen, stack, roads = {start}, [start], set()
+    while stack:
+        for v in step(stack.pop()):
+            if g.nodes[v]["kind"] is Kind.ROAD:
+                roads.add(v)
+            elif v not in seen:
+                seen.add(v)
+                stack.append(v)
+    return roads
+
+
 def _ramp_ends(topology: Topology) -> list[tuple[str, set[str], set[str]]]:
     g = topology.graph
-    ramps = set(topology.ramps)
-    out = []
-    for r in sorted(ramps):
-        up = {u for u in nx.ancestors(g, r) if g.nodes[u]["kind"] is Kind.ROAD}
-        down = {v for v in nx.descendants(g, r) if g.nodes[v]["kind"] is Kind.ROAD}
-        out.append((r, up, down))
-    return out
+    return [(r, _first_roads(g, r, g.predecessors), _first_roads(g, r, g.successors))
+            for r in sorted(topology.ramps)]
 
 
 def self_check(topology: Topology) -> list[dict]:
