@@ -9,9 +9,8 @@ what is needed reaches Python:
    when asked), with their nodes' coordinates from libosmium's node-location
    index (``flex_mem``: dense or sparse as the ids are); no node object
    reaches Python;
-2. the ``highway=*`` ways holding a network node (an ordinary road touching the
-   network is an exit) and the network's nodes tagged ``ele``, picked by
-   libosmium's id tracker.
+2. the ``highway=*`` ways (an ordinary road touching the network is an exit)
+   and the nodes tagged ``ele``.
 
 Memory: the node-location index (8–16 bytes per node of the file) and the
 motorway network.
@@ -184,18 +183,14 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
                 for ref, lat, lon in pts:
                     coords[ref] = (lat, lon)
             needed = {n for w in ways.values() for n in w.nodes}
-            # 2. ordinary roads touching the network (exits) and the ele of network nodes: only
-            #    the highway ways holding a network node and the network's nodes tagged ele
-            #    reach Python (libosmium's id tracker filters them)
+            # 2. ordinary roads touching the network (exits) and the ele of network nodes: the
+            #    nodes tagged ele and the ways tagged highway reach Python. (libosmium's id
+            #    tracker would pick the ways holding a network node in C++, but its id set is
+            #    dense: ~1.5 GB for node ids spread over today's OSM id range.)
             if ways:
-                tracker = osmium.IdTracker()
-                for n in needed:
-                    tracker.add_node(n)
                 second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
                     .with_filter(osmium.filter.KeyFilter("ele").enable_for(osmium.osm.NODE)) \
-                    .with_filter(tracker.id_filter().enable_for(osmium.osm.NODE)) \
-                    .with_filter(osmium.filter.KeyFilter("highway").enable_for(osmium.osm.WAY)) \
-                    .with_filter(tracker.contains_filter().enable_for(osmium.osm.WAY))
+                    .with_filter(osmium.filter.KeyFilter("highway").enable_for(osmium.osm.WAY))
                 for o in second:
                     if o.is_node():
                         if "ele" in o.tags and o.id in needed:
