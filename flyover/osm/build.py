@@ -155,8 +155,13 @@ class _Stretch:
         return self.nodes[-1]
 
     @property
+    def cum(self) -> np.ndarray:
+        """Arclength at each node (computed once per geometry)."""
+        return _cached(self, "_cum", lambda: arclength(self.xy))
+
+    @property
     def length(self) -> float:
-        return _cached(self, "_length", lambda: float(arclength(self.xy)[-1]))
+        return float(self.cum[-1])
 
 
 class _Network:
@@ -591,7 +596,7 @@ class _Builder:
     def _probe_out(self, s: _Stretch) -> np.ndarray:
         if s.start in self.nw.snapped and len(s.xy) > 1:
             return s.xy[1]  # the link's real start: which side of the carriageway it lies on
-        return _cached(s, "_probe_out", lambda: point_at(s.xy, min(_PROBE_M, 0.5 * s.length)))
+        return _cached(s, "_probe_out", lambda: point_at(s.xy, min(_PROBE_M, 0.5 * s.length), s.cum))
 
     def _probe_in(self, s: _Stretch) -> np.ndarray:
         if s.end in self.nw.snapped and len(s.xy) > 1:

@@ -38,10 +38,11 @@ def arclength(xy: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
 
 
-def point_at(xy: np.ndarray, s: float) -> np.ndarray:
-    """The point at arclength ``s`` (clipped to the polyline)."""
+def point_at(xy: np.ndarray, s: float, cum: np.ndarray | None = None) -> np.ndarray:
+    """The point at arclength ``s`` (clipped to the polyline); ``cum``: its
+    :func:`arclength`, if already known."""
     xy = np.asarray(xy, float)
-    cum = arclength(xy)
+    cum = arclength(xy) if cum is None else cum
     s = float(np.clip(s, 0.0, cum[-1]))
     return np.array([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
 
@@ -117,15 +118,24 @@ def run_beside(line, other, separation_m: float, max_length_m: float) -> np.ndar
     if len(line) < 2 or len(other) < 2:
         return line[:1]
     cum = arclength(line)
-    d = np.array([segment_distances(p, other[:-1], other[1:])[0].min() for p in line])
-    out = [line[0]]
-    for k in range(1, len(line)):
-        if d[k] > separation_m:
-            t = (separation_m - d[k - 1]) / (d[k] - d[k - 1]) if d[k] > d[k - 1] else 0.0
+    a, b = other[:-1], other[1:]
+    # only the segments of ``other`` that the points measured (up to the first past
+    # max_length_m along the line) can come within separation_m of
+    last = min(int(np.searchsorted(cum, max_length_m, side="right")), len(line) - 1)
+    near = segment_distances(line[0], a, b)[0] <= cum[last] + separation_m
+    a, b = a[near], b[near]
+    if not len(a):
+        return line[:1]
+    out, d_prev = [line[0]], float(segment_distances(line[0], a, b)[0].min())
+    for k in range(1, len(line)):  # (distances measured only as far as the run goes)
+        d = float(segment_distances(line[k], a, b)[0].min())
+        if d > separation_m:
+            t = (separation_m - d_prev) / (d - d_prev) if d > d_prev else 0.0
             out.append(line[k - 1] + float(np.clip(t, 0.0, 1.0)) * (line[k] - line[k - 1]))
             break
         if cum[k] > max_length_m:
             out.append(point_at(line, max_length_m))
             break
         out.append(line[k])
+        d_prev = d
     return np.array(out)
