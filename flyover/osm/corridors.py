@@ -25,8 +25,15 @@ __all__ = ["name_corridors"]
 
 
 def name_corridors(b) -> None:
-    """Set ``corridor`` on every carriageway (``b.groups``) of a builder
-    (:class:`flyover.osm.build._Builder`: its stretches ``b.st``, network ``b.nw``)."""
+    """Set ``corridor`` on every carriageway of a builder, by the rules of this module.
+
+    Parameters
+    ----------
+    b
+        A :class:`flyover.osm.build._Builder`: its carriageways ``b.groups`` (each with
+        ``stretches``, ``ways``, ``xy``, ``corridor`` from its refs or ``None``), stretches
+        ``b.st`` and network ``b.nw`` (refs by way, the ways' tags, ``quirk`` for the notes).
+    """
     _unify_corridors(b)
     _pair_named_carriageways(b)
     _pair_missing_refs(b, with_ref=True)

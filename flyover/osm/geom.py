@@ -110,6 +110,20 @@ def run_beside(line, other, separation_m: float, max_length_m: float) -> np.ndar
     ``other`` (cut where it leaves, interpolated between vertices), at most ``max_length_m``
     long: where a carriageway that splits from another without a link runs beside it.
 
+    Parameters
+    ----------
+    line, other
+        Polylines ``(n, 2)`` in metres; ``line`` begins where it leaves ``other``.
+    separation_m
+        Distance from ``other`` at which the run ends.
+    max_length_m
+        Longest run, along ``line``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The run ``(k, 2)``, from ``line[0]`` (a single point if ``other`` has no segment).
+
     >>> run_beside([[0, 0], [0, 100], [50, 200]], [[0, 0], [0, 300]], 10.0, 500.0).round(1).tolist()
     [[0.0, 0.0], [0.0, 100.0], [10.0, 120.0]]
     """
