@@ -1111,14 +1111,15 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     name, name_from = interchange_name(corridors, first_node)
 
     # roads: window along each carriageway, heading, expressway pairing
-    window, heading = {}, {}
+    window, heading, cums = {}, {}, {}
     for g in road_gids:
         grp = b.groups[g]
         s = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
-        total = float(arclength(grp.xy)[-1])
+        cums[g] = arclength(grp.xy)  # (once per carriageway: point_at would redo it each time)
+        total = float(cums[g][-1])
         lo, hi = max(0.0, min(s) - 300.0), min(total, max(s) + 300.0)
         window[g] = (lo, hi)
-        heading[g] = _unit(point_at(grp.xy, hi) - point_at(grp.xy, lo))
+        heading[g] = _unit(point_at(grp.xy, hi, cums[g]) - point_at(grp.xy, lo, cums[g]))
     exp_of: dict[int, str] = {}
     for c in corridors:
         gs = [g for g in road_gids if b.groups[g].corridor == c]
@@ -1168,7 +1169,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     for g in road_gids:
         grp = b.groups[g]
         lo, hi = window[g]
-        cum = arclength(grp.xy)
+        cum = cums[g]
         inside = (cum >= lo) & (cum <= hi)
         ways_in = list(dict.fromkeys(w for c in grp.stretches for w in b.st[c].ways
                                      if lo <= grp.s_of[b.st[c].end] and grp.s_of[b.st[c].start] <= hi))
@@ -1187,7 +1188,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         for n, kind, dead, s_in in ((first, "in", nw.dead_in, min(_PROBE_M, total)),
                                     (last, "out", nw.dead_out, max(total - _PROBE_M, 0.0))):
             if n in dead:  # with the way the road would go on, outward
-                out = _unit(nw.xy[n] - point_at(grp.xy, s_in))
+                out = _unit(nw.xy[n] - point_at(grp.xy, s_in, cum))
                 dead_ends[(n, kind)] = [*nw.unmirrored(nw.xy[n])[0].round(1).tolist(),
                                         *nw.unmirrored(out)[0].round(4).tolist(), kind]
     for n in local_nodes:
