@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
+from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import networkx as nx
@@ -258,6 +259,25 @@ def test_carriageway_cut_at_the_extract_edge_at_a_diverge(tmp_path):
     assert "extract edge" in notes(t)
 
 
+def test_carriageway_splitting_without_a_link_gets_a_ramp_with_geometry(tmp_path):
+    """B 2's eastbound carriageway leaves A 1 northbound at (15, 0) without a link (a direct
+    split): the ramp joining them runs along B's carriageway from the split while it is within
+    10 m of A's (about 40 m here: B drifts 25 m east per 100 m north), not a point."""
+    ways = cross_roads()[:2] + [
+        carriageway([(15, 0), (40, 100), (200, 300), (1000, 600)], "B 2"),
+        carriageway([(1000, 630), (200, 330), (-15, 100)], "B 2"),
+    ]
+    t = only(write_osm(tmp_path / "direct.osm", ways))
+    lines = t.attrs["osm"]["lines"]
+    direct = [r for r in t.ramps if t.graph.nodes[r]["osm_ways"] == ""]
+    assert len(direct) == 2  # B leaves A1 and B westbound joins A2, both without a link
+    split = next(r for r in direct if any(d["label"] is Label.IN_M for _, _, d in t.graph.out_edges(r, data=True)))
+    attrs = t.graph.nodes[split]
+    assert 35 < attrs["length_m"] < 50 and len(lines[split]) >= 2
+    assert math.hypot(lines[split][0][0] - lines[split][-1][0], lines[split][0][1] - lines[split][-1][1]) \
+        == pytest.approx(attrs["length_m"], rel=0.01)  # a straight piece of B, from the split on
+
+
 def test_ramp_ending_short_of_its_road_is_snapped_within_tolerance(tmp_path):
     ways = cloverleaf_ways()
     pts = ways[4]["points"]  # outer ramp A1 → B1, ends on B1 at (500, -15)
@@ -321,6 +341,40 @@ def test_two_interchanges_sharing_a_carriageway_are_separate(tmp_path):
     assert {tuple(t.expressways) for t in ts} == {("A1", "B2"), ("A1", "C3")}
 
 
+def three_motorways(dy=0.0):
+    """A 1 (north-south) and B 2 (east-west) cross; C 3 comes from the east at y≈150 (``dy``
+    further north) and ends at x=400. Every ramp joins two motorways and meets no other ramp:
+    A1 → B1 (the cloverleaf's outer ramp), C westbound → A1, A1 → C eastbound and, with C
+    where it is (``dy`` = 0), B1 → C eastbound (350 m after C eastbound begins: not a
+    trumpet stem's merge)."""
+    ways = cross_roads(yhi=1500 + dy) + [
+        carriageway(shift([(1500, 165), (400, 165)], dy=dy), "C 3"),
+        carriageway(shift([(400, 135), (1500, 135)], dy=dy), "C 3"),
+        way(OUTER),                                                      # A – B
+        way(shift([(400, 165), (200, 180), (60, 270), (15, 370)], dy=dy)),  # C – A
+        way(shift([(15, 50), (60, 90), (200, 125), (400, 135)], dy=dy)),    # A – C
+    ]
+    if dy == 0:
+        ways.append(way([(650, -15), (700, 20), (740, 100), (750, 135)]))  # B – C
+    return ways
+
+
+def test_links_touching_three_motorways_close_together_are_one_interchange(tmp_path):
+    """Pattern 2 of issue 23: the A–B, A–C and B–C ramps of a system interchange never meet one
+    another (three link groups, each of two motorways); close together they are one interchange
+    of three motorways, not three pairwise ones."""
+    t = only(write_osm(tmp_path / "system.osm", three_motorways()))
+    assert set(t.expressways) == {"A1", "B2", "C3"}
+    assert t.n_ramps == 4 and t.n_roads == 4  # A1, B1 and C's two carriageways have ramps
+    assert t.legs == 5  # A and B pass through, C ends
+
+
+def test_three_motorways_far_apart_stay_pairwise_interchanges(tmp_path):
+    """A–B and A–C ramps 1 km apart along A 1 (sharing only A 1) stay two interchanges."""
+    ts = read_osm_topologies(write_osm(tmp_path / "apart.osm", three_motorways(dy=1000.0)), OsmOptions())
+    assert sorted(tuple(sorted(t.expressways)) for t in ts) == [("A1", "B2"), ("A1", "C3")]
+
+
 # -- reading, names, outputs --------------------------------------------------------
 
 def test_reader_keeps_only_the_motorway_network(tmp_path):
@@ -379,6 +433,25 @@ def test_import_city_writes_graphml_and_picture(tmp_path):
     name = index["interchanges"][0]["interchange"]
     assert (tmp_path / "out" / f"{name}.graphml").exists() and (tmp_path / "out" / f"{name}.png").exists()
     assert nx.read_graphml(tmp_path / "out" / f"{name}.graphml").number_of_nodes() == 8
+
+
+def test_self_check_rows_are_the_city_notes(tmp_path):
+    """A cloverleaf with one more link that leaves A1, splits, and comes back onto A1 on one
+    branch (to B1 on the other): its self-check says a ramp leaves and joins one carriageway,
+    and the city's index.json carries that row with the file, the interchange and its picture."""
+    from flyover.topology.city import import_city
+
+    back = [way([(15, -1100), (60, -1000), (90, -950)]), way([(90, -950), (60, -850), (15, -750)]),
+            way([(90, -950), (700, -300), (900, -15)])]
+    path = write_osm(tmp_path / "odd.osm", cloverleaf_ways() + back)
+    [t] = read_osm_topologies(path, OsmOptions())
+    rows = t.attrs["osm"]["self_check"]
+    assert [r["check"] for r in rows] == ["ramp"] and "same carriageway" in rows[0]["detail"]
+    index = import_city("odd", [path], tmp_path / "odd")
+    assert len(index["notes"]) == len(rows)
+    for row in index["notes"]:
+        assert row["source_file"] == str(path) and row["interchange"] == t.name
+        assert Path(row["preview"]).is_file() and row["check"] == "ramp" and row["detail"] == rows[0]["detail"]
 
 
 def test_keep_exits_keeps_links_to_ordinary_roads(tmp_path):

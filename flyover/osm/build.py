@@ -9,8 +9,8 @@ Steps (each survives messy data with a logged reason):
 2. **Snapping.** A link end that touches neither the network nor an ordinary
    road and lies within ``snap_tolerance_m`` of a carriageway is joined to it.
 3. **Connectors tagged motorway.** A short ``motorway`` stretch without ``ref``
-   fed only by links (or feeding only links, or forking off a carriageway) is
-   treated as a link.
+   fed only by links (or feeding only links, or forking off a carriageway), or a
+   chain of them that leaves one carriageway and joins another, is treated as a link.
 4. **Pruning.** Links not on a carriageway-to-carriageway path (exits to
    ordinary roads) are dropped unless ``keep_exits``.
 5. **Stretches.** The network is cut at every diverge and merge; road
@@ -25,9 +25,10 @@ Steps (each survives messy data with a logged reason):
    merging ramp gets ``In-L``/``In-R``); ramps that all end at a merge feed a
    new ramp node (``In-L``/``In-R``), as in the catalog's stack.
 7. **Interchanges.** Link components joining ≥ 2 corridors (by ``ref``,
-   falling back to geometry), clustered when they share two corridors and lie
-   within ``cluster_distance_m``; two interchanges sharing one carriageway stay
-   separate.
+   falling back to geometry), clustered by :func:`flyover.osm.cluster.cluster_link_groups`:
+   sharing two corridors within ``cluster_distance_m``, or one corridor (a system
+   interchange of three or more motorways) within half of it; interchanges further
+   apart along one motorway stay separate.
 """
 
 from __future__ import annotations
@@ -41,8 +42,10 @@ import numpy as np
 
 from flyover.errors import TopologyError
 from flyover.osm.check import RING_MARGIN_M, self_check
+from flyover.osm.cluster import cluster_link_groups
+from flyover.osm.corridors import name_corridors
 from flyover.osm.driving_side import driving_side_at
-from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at,
+from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at, run_beside,
                               segment_distances, turn_deg)
 from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
@@ -152,8 +155,13 @@ class _Stretch:
         return self.nodes[-1]
 
     @property
+    def cum(self) -> np.ndarray:
+        """Arclength at each node (computed once per geometry)."""
+        return _cached(self, "_cum", lambda: arclength(self.xy))
+
+    @property
     def length(self) -> float:
-        return _cached(self, "_length", lambda: float(arclength(self.xy)[-1]))
+        return float(self.cum[-1])
 
 
 class _Network:
@@ -336,6 +344,8 @@ class _Network:
 
     # -- 3. connectors tagged motorway ------------------------------------
     def reclassify_connectors(self) -> None:
+        if not any(c == ROAD and not self.ref[w] for w, c in self.cls.items()):
+            return  # (only a carriageway way without ref can be a connector: most places)
         for st in self.build_stretches():
             if st.cls != ROAD or any(self.ref[w] for w in st.ways):
                 continue
@@ -359,6 +369,48 @@ class _Network:
                 why = "fed by links" if fed_by_links else "feeding links" if feeds_links else "forking"
                 self.quirk(f"way(s) {', '.join(map(str, st.ways))}: tagged motorway without ref, "
                            f"{st.length:.0f} m, {why}: treated as motorway_link")
+        self._reclassify_crossovers()
+
+    def _reclassify_crossovers(self) -> None:
+        """A ``motorway`` chain without ref that leaves one carriageway where that one goes on
+        (a diverge) and joins another where that one goes on (a merge), up to
+        ``connector_max_length_m`` long, is a connector between two roads: a link (Sydney's
+        Cahill Expressway → Western Distributor roadway tagged ``motorway``). The chain may pass
+        nodes where only links branch off."""
+        if not any(len(ss) > 1 and sum(self.seg_cls(n, x) == ROAD for x in ss) > 1 for n, ss in self.succ.items()):
+            return  # (no carriageway splits without a link)
+        by_start: dict[int, list[_Stretch]] = defaultdict(list)
+        stretches = self.build_stretches()
+        for st in stretches:
+            by_start[st.start].append(st)
+
+        def road_outs(n):
+            return [s for s in self.succ[n] if self.seg_cls(n, s) == ROAD]
+
+        def road_ins(n):
+            return [p for p in self.pred[n] if self.seg_cls(p, n) == ROAD]
+
+        for st in stretches:
+            if st.cls != ROAD or len(road_outs(st.start)) < 2 or not road_ins(st.start):
+                continue
+            chain, length, cur = [st], st.length, st
+            while len(road_ins(cur.end)) == 1 and len(road_outs(cur.end)) == 1:
+                nxt = [s for s in by_start[cur.end] if s.cls == ROAD]
+                if len(nxt) != 1 or nxt[0] in chain:
+                    break
+                cur = nxt[0]
+                chain.append(cur)
+                length += cur.length
+                if length > self.opt.connector_max_length_m:
+                    break
+            ways = list(dict.fromkeys(w for c in chain for w in c.ways if self.cls[w] == ROAD))
+            if (length > self.opt.connector_max_length_m or len(road_ins(cur.end)) < 2
+                    or not road_outs(cur.end) or any(self.ref[w] for w in ways)):
+                continue
+            for w in ways:
+                self.cls[w] = LINK
+            self.quirk(f"way(s) {', '.join(map(str, ways))}: tagged motorway without ref, {length:.0f} m, "
+                       "leaves one carriageway and joins another: treated as motorway_link")
 
     def extend_cut_carriageways(self) -> None:
         """A carriageway tagged ``motorway_link`` past the interchange that leaves the extract
@@ -366,8 +418,8 @@ class _Network:
         (no ordinary road there) is, from that end on, a carriageway while its ways carry
         the name of a motorway carriageway of the network and run straight (turn < 90°)."""
         names = {self.net.ways[w].tag("name") for w, c in self.cls.items() if c == ROAD} - {None}
-        if not names:
-            return
+        if not any(c == LINK and self.net.ways[w].tag("name") in names for w, c in self.cls.items()):
+            return  # (no link is named like a carriageway)
         for st in self.build_stretches():
             if st.cls != LINK:
                 continue
@@ -387,6 +439,13 @@ class _Network:
                     self.quirk(f"link way(s) {', '.join(map(str, changed))} named like a carriageway "
                                f"({self.net.ways[changed[0]].tag('name')}) leave the extract: read as "
                                "that carriageway")
+
+    def note_dead_ends(self) -> None:
+        """The nodes where the network as read (before pruning) begins or ends: nothing comes
+        in (``dead_in``) or goes on (``dead_out``); a motorway that ends there ends on the map
+        (at ordinary roads or the extract's edge), not into links. For the self-check."""
+        self.dead_in = {n for n, s in self.succ.items() if s and not self.pred.get(n)}
+        self.dead_out = {n for n, p in self.pred.items() if p and not self.succ.get(n)}
 
     # -- 4. pruning -------------------------------------------------------
     def prune_links(self) -> None:
@@ -531,83 +590,13 @@ class _Builder:
             self.groups.append(g)
             for c in chain:
                 self.group_of[c] = g.gid
-        self._unify_corridors()
-        self._fill_missing_refs()
-
-    def _unify_corridors(self) -> None:
-        """Refs met along one carriageway (a route joining or leaving, a route number changing)
-        are one corridor, named by the ref covering most length."""
-        parent: dict[str, str] = {}
-
-        def find(r):
-            while parent.setdefault(r, r) != r:
-                r = parent[r]
-            return r
-
-        length = Counter()
-        for g in self.groups:
-            refs = []
-            for c in g.stretches:
-                st = self.st[c]
-                for w in st.ways:
-                    if self.nw.ref[w]:
-                        refs.append(self.nw.ref[w])
-                        length[self.nw.ref[w]] += st.length / len(st.ways)
-            for r in refs[1:]:
-                a, b = find(refs[0]), find(r)
-                if a != b:
-                    parent[max(a, b)] = min(a, b)
-        members = defaultdict(list)
-        for r in list(parent):
-            members[find(r)].append(r)
-        name = {}
-        for rs in members.values():
-            best = max(sorted(rs), key=lambda r: length[r])
-            for r in rs:
-                name[r] = best
-            if len(rs) > 1:
-                self.nw.quirk(f"refs {', '.join(sorted(rs))} follow one another along a carriageway: "
-                              f"one corridor {best}")
-        for g in self.groups:
-            if g.corridor is not None:
-                g.corridor = name.get(g.corridor, g.corridor)
-
-    def _fill_missing_refs(self) -> None:
-        self._pair_missing_refs(with_ref=True)
-        self._pair_missing_refs(with_ref=False)
-
-    def _pair_missing_refs(self, with_ref: bool) -> None:
-        """Give a carriageway without ref its opposite carriageway's ref (``with_ref``),
-        or else pair it with an opposite carriageway also without ref under a geometric name."""
-        for g in self.groups:
-            if g.corridor is not None:
-                continue
-            heading = _unit(g.xy[-1] - g.xy[0])
-            best, best_d = None, 150.0
-            for h in self.groups:
-                if h is g or (h.corridor is None) == with_ref or \
-                        float(np.dot(heading, _unit(h.xy[-1] - h.xy[0]))) > -0.5:
-                    continue
-                d, _ = segment_distances(g.xy[len(g.xy) // 2], h.xy[:-1], h.xy[1:])
-                if d.min() < best_d:
-                    best, best_d = h, float(d.min())
-            if best is not None and with_ref:
-                g.corridor = best.corridor
-                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: ref {best.corridor} "
-                              f"from the opposite carriageway {best_d:.0f} m away")
-            elif best is not None:
-                g.corridor = best.corridor = f"way{min(g.ways + best.ways)}"
-                self.nw.quirk(f"carriageways way(s) {g.ways[:3]} and {best.ways[:3]} without ref, "
-                              f"opposite and {best_d:.0f} m apart: corridor named {g.corridor}")
-            elif not with_ref:
-                g.corridor = f"way{min(g.ways)}"
-                self.nw.quirk(f"carriageway way(s) {g.ways[:3]} without ref: corridor named {g.corridor}")
+        name_corridors(self)
 
     # -- junction labels ----------------------------------------------------
     def _probe_out(self, s: _Stretch) -> np.ndarray:
         if s.start in self.nw.snapped and len(s.xy) > 1:
             return s.xy[1]  # the link's real start: which side of the carriageway it lies on
-        return _cached(s, "_probe_out", lambda: point_at(s.xy, min(_PROBE_M, 0.5 * s.length)))
+        return _cached(s, "_probe_out", lambda: point_at(s.xy, min(_PROBE_M, 0.5 * s.length), s.cum))
 
     def _probe_in(self, s: _Stretch) -> np.ndarray:
         if s.end in self.nw.snapped and len(s.xy) > 1:
@@ -621,7 +610,8 @@ class _Builder:
 
     def _direct_edges(self, n: int, ri: list[_Stretch], ro: list[_Stretch]) -> list:
         """Carriageways meeting without a link: a carriageway that begins at a diverge (ends at
-        a merge) of another is joined to it by a ramp of no length, ``("direct", n)``: the
+        a merge) of another is joined to it by a ramp ``("direct", n)`` (its geometry: the branch
+        where it runs beside the through carriageway, :func:`_direct_ramp_line`): the
         through carriageway ``Out-R``/``Out-L`` → ramp → ``In-M`` the branch (branch ``Out-M``
         → ramp → ``In-R``/``In-L`` the through carriageway)."""
         p = self.nw.xy[n]
@@ -889,7 +879,13 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
             _PARTS = None
             gc.unfreeze()
     else:
-        results = [_build_part_safe(p, options) for p in parts]
+        # the network read so far is not garbage: frozen, the collector's passes while building
+        # do not walk it again and again (as in the forked workers)
+        gc.freeze()
+        try:
+            results = [_build_part_safe(p, options) for p in parts]
+        finally:
+            gc.unfreeze()
     for found, exc in results:
         out += found
         if exc is not None:
@@ -901,9 +897,6 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
         log.warning("%s: duplicate interchange name %s", net.source, name)
     return sorted(out, key=lambda t: t.name)
 
-
-#: link groups of the same two corridors joined to a same carriageway cluster up to this times ``cluster_distance_m``
-_SHARED_CARRIAGEWAY_FACTOR = 2.0
 
 #: how far (m) beyond its first and last junction a carriageway is kept for the self-check
 _CHECK_REACH_M = 1500.0
@@ -1006,8 +999,9 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     nw = _Network(net, options)
     nw.add_ways()
     nw.snap_dangling_links()
-    nw.reclassify_connectors()
     nw.extend_cut_carriageways()
+    nw.reclassify_connectors()
+    nw.note_dead_ends()
     if not options.keep_exits:
         nw.prune_links()
     b = _Builder(nw)
@@ -1060,19 +1054,9 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
                 nw.ignored.setdefault(w, f"joins only corridor {sorted(map(str, corridors(ci)))}")
             nw.quirk(f"link way(s) {ways} join only corridor {sorted(map(str, corridors(ci)))}: "
                      "not a motorway-to-motorway interchange")
-    close = []
-    for x, ci in enumerate(multi):
-        for cj in multi[x + 1:]:
-            if len(corridors(ci) & corridors(cj)) < 2:
-                continue
-            pi, pj = points(ci), points(cj)
-            d = np.sqrt(((pi[:, None, :] - pj[None, :, :]) ** 2).sum(-1)).min()
-            # joined to a same carriageway (a split or merge without links
-            # a little away from the flyovers): one interchange a little further apart
-            shared = bool(groups(ci) & groups(cj))
-            if d <= options.cluster_distance_m * (_SHARED_CARRIAGEWAY_FACTOR if shared else 1.0):
-                close.append((ci, cj))
-    clusters = _components(multi, close)
+    clusters = [[multi[k] for k in cl] for cl in cluster_link_groups(
+        [corridors(ci) for ci in multi], [groups(ci) for ci in multi], [points(ci) for ci in multi],
+        options.cluster_distance_m)]
     out, failed = [], []
     for cl in clusters:
         cl_edges = [e for ci in cl for cj in [ci, *attached[ci]] for e in comp_edges[cj]]
@@ -1091,6 +1075,30 @@ def _build_part(net: OsmNetwork, options: OsmOptions) -> list[Topology]:
     return out
 
 
+#: a carriageway splitting from (merging into) another without a link: its ramp is where it
+#: runs within this distance (m) of the other, at most ``_DIRECT_MAX_M`` long
+_DIRECT_SEPARATION_M = 10.0
+_DIRECT_MAX_M = 300.0
+
+
+def _direct_ramp_line(b: _Builder, edges: list, key: tuple) -> np.ndarray:
+    """The geometry of a ramp ``("direct", node)`` (a carriageway splitting from or merging into
+    another without a link), in the direction of travel: the branch carriageway from (to) the
+    junction while it runs beside the through one (:func:`flyover.osm.geom.run_beside`)."""
+    n = key[1]
+    ends = [(e[0] if e[1] == key else e[1], e[2]) for e in edges if key in e[:2]]
+    branch = next((r for r, lab in ends if lab in (Label.IN_M, Label.OUT_M) and r[0] == "road"), None)
+    through = next((r for r, lab in ends if r != branch and r[0] == "road"), None)
+    if branch is None or through is None:
+        return b.nw.xy[n].reshape(1, 2)
+    grp, other = b.groups[branch[1]], b.groups[through[1]].xy
+    k = int(np.searchsorted(arclength(grp.xy), grp.s_of[n] - 1e-6))
+    splits = any(e[0] == through and e[1] == key for e in edges)
+    if splits:  # the branch from the junction on
+        return run_beside(grp.xy[k:], other, _DIRECT_SEPARATION_M, _DIRECT_MAX_M)
+    return run_beside(grp.xy[:k + 1][::-1], other, _DIRECT_SEPARATION_M, _DIRECT_MAX_M)[::-1]
+
+
 def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     net = nw.net
     road_gids = sorted({k[1] for e in edges for k in e[:2] if k[0] == "road"})
@@ -1103,14 +1111,15 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     name, name_from = interchange_name(corridors, first_node)
 
     # roads: window along each carriageway, heading, expressway pairing
-    window, heading = {}, {}
+    window, heading, cums = {}, {}, {}
     for g in road_gids:
         grp = b.groups[g]
         s = [grp.s_of[e[3]] for e in edges if ("road", g) in e[:2]]
-        total = float(arclength(grp.xy)[-1])
+        cums[g] = arclength(grp.xy)  # (once per carriageway: point_at would redo it each time)
+        total = float(cums[g][-1])
         lo, hi = max(0.0, min(s) - 300.0), min(total, max(s) + 300.0)
         window[g] = (lo, hi)
-        heading[g] = _unit(point_at(grp.xy, hi) - point_at(grp.xy, lo))
+        heading[g] = _unit(point_at(grp.xy, hi, cums[g]) - point_at(grp.xy, lo, cums[g]))
     exp_of: dict[int, str] = {}
     for c in corridors:
         gs = [g for g in road_gids if b.groups[g].corridor == c]
@@ -1153,14 +1162,14 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
             lo, hi = window[road[1]]
             pos = round(float(np.clip((b.groups[road[1]].s_of[n] - lo) / max(hi - lo, 1e-9), 0, 1)), 4)
         conns.append(Connection(nid(src), nid(dst), label, pos))
-    roads, node_attrs, lines, carriageways = [], {}, {}, {}
+    roads, node_attrs, lines, carriageways, dead_ends = [], {}, {}, {}, {}
     junction_xy = np.array([nw.xy[n] for n in junction_nodes])
     ring_centre = junction_xy.mean(axis=0)
     ring_radius = float(np.hypot(*(junction_xy - ring_centre).T).max()) + RING_MARGIN_M + 50.0
     for g in road_gids:
         grp = b.groups[g]
         lo, hi = window[g]
-        cum = arclength(grp.xy)
+        cum = cums[g]
         inside = (cum >= lo) & (cum <= hi)
         ways_in = list(dict.fromkeys(w for c in grp.stretches for w in b.st[c].ways
                                      if lo <= grp.s_of[b.st[c].end] and grp.s_of[b.st[c].start] <= hi))
@@ -1173,6 +1182,15 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         near = np.hypot(*(grp.xy - ring_centre).T) <= ring_radius
         near = near | np.concatenate([near[1:], [False]]) | np.concatenate([[False], near[:-1]])
         carriageways[road_id[g]] = nw.unmirrored(grp.xy[reach & near]).round(1).tolist()
+        first, last = b.st[grp.stretches[0]].start, b.st[grp.stretches[-1]].end
+        # where nothing goes on on the map (a stub ending at ordinary roads, the extract's edge)
+        total = float(cum[-1])
+        for n, kind, dead, s_in in ((first, "in", nw.dead_in, min(_PROBE_M, total)),
+                                    (last, "out", nw.dead_out, max(total - _PROBE_M, 0.0))):
+            if n in dead:  # with the way the road would go on, outward
+                out = _unit(nw.xy[n] - point_at(grp.xy, s_in, cum))
+                dead_ends[(n, kind)] = [*nw.unmirrored(nw.xy[n])[0].round(1).tolist(),
+                                        *nw.unmirrored(out)[0].round(4).tolist(), kind]
     for n in local_nodes:
         tags = net.ordinary.get(n, {})
         label = tags.get("ref") or tags.get("name") or ("extract edge" if not tags else tags.get("highway"))
@@ -1183,6 +1201,12 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
     for k in ramp_keys:
         rid = ramp_id[k]
         ramps.append(Ramp(rid))
+        if k[0] == "direct":
+            real = _direct_ramp_line(b, edges, k)
+            node_attrs[rid] = {"length_m": round(float(arclength(real)[-1]), 1),
+                               "min_radius_m": round(min_radius(real), 1), "osm_ways": ""}
+            lines[rid] = real.tolist()
+            continue
         if k[0] != "ramp":
             node_attrs[rid] = {"length_m": 0.0, "min_radius_m": float("inf"), "osm_ways": ""}
             lines[rid] = [nw.xy[k[1]].tolist()]
@@ -1209,6 +1233,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
                       for src, dst, label, n in edges],
         "driving_side": nw.side,
         "carriageways": carriageways,
+        "dead_ends": [dead_ends[k] for k in sorted(dead_ends)],
         "quirks": list(nw.quirks),
         "ignored_links": {str(w): why for w, why in sorted(nw.ignored.items())},
     }

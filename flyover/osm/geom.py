@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["LocalProjection", "arclength", "point_at", "min_radius", "segment_distances", "bearing_letter",
-           "turn_deg"]
+           "turn_deg", "run_beside"]
 
 _EARTH_RADIUS_M = 6_371_008.8
 
@@ -38,10 +38,11 @@ def arclength(xy: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
 
 
-def point_at(xy: np.ndarray, s: float) -> np.ndarray:
-    """The point at arclength ``s`` (clipped to the polyline)."""
+def point_at(xy: np.ndarray, s: float, cum: np.ndarray | None = None) -> np.ndarray:
+    """The point at arclength ``s`` (clipped to the polyline); ``cum``: its
+    :func:`arclength`, if already known."""
     xy = np.asarray(xy, float)
-    cum = arclength(xy)
+    cum = arclength(xy) if cum is None else cum
     s = float(np.clip(s, 0.0, cum[-1]))
     return np.array([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
 
@@ -102,3 +103,53 @@ def turn_deg(xy) -> float:
         return 0.0
     da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
     return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
+
+
+def run_beside(line, other, separation_m: float, max_length_m: float) -> np.ndarray:
+    """The beginning of polyline ``line`` while it stays within ``separation_m`` of polyline
+    ``other`` (cut where it leaves, interpolated between vertices), at most ``max_length_m``
+    long: where a carriageway that splits from another without a link runs beside it.
+
+    Parameters
+    ----------
+    line, other
+        Polylines ``(n, 2)`` in metres; ``line`` begins where it leaves ``other``.
+    separation_m
+        Distance from ``other`` at which the run ends.
+    max_length_m
+        Longest run, along ``line``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The run ``(k, 2)``, from ``line[0]`` (a single point if ``other`` has no segment).
+
+    >>> run_beside([[0, 0], [0, 100], [50, 200]], [[0, 0], [0, 300]], 10.0, 500.0).round(1).tolist()
+    [[0.0, 0.0], [0.0, 100.0], [10.0, 120.0]]
+    """
+    line = np.asarray(line, float).reshape(-1, 2)
+    other = np.asarray(other, float).reshape(-1, 2)
+    if len(line) < 2 or len(other) < 2:
+        return line[:1]
+    cum = arclength(line)
+    a, b = other[:-1], other[1:]
+    # only the segments of ``other`` that the points measured (up to the first past
+    # max_length_m along the line) can come within separation_m of
+    last = min(int(np.searchsorted(cum, max_length_m, side="right")), len(line) - 1)
+    near = segment_distances(line[0], a, b)[0] <= cum[last] + separation_m
+    a, b = a[near], b[near]
+    if not len(a):
+        return line[:1]
+    out, d_prev = [line[0]], float(segment_distances(line[0], a, b)[0].min())
+    for k in range(1, len(line)):  # (distances measured only as far as the run goes)
+        d = float(segment_distances(line[k], a, b)[0].min())
+        if d > separation_m:
+            t = (separation_m - d_prev) / (d - d_prev) if d > d_prev else 0.0
+            out.append(line[k - 1] + float(np.clip(t, 0.0, 1.0)) * (line[k] - line[k - 1]))
+            break
+        if cum[k] > max_length_m:
+            out.append(point_at(line, max_length_m))
+            break
+        out.append(line[k])
+        d_prev = d
+    return np.array(out)

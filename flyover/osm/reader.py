@@ -10,7 +10,7 @@ what is needed reaches Python:
    index (``flex_mem``: dense or sparse as the ids are); no node object
    reaches Python;
 2. the ``highway=*`` ways (an ordinary road touching the network is an exit)
-   and the nodes tagged ``ele`` or ``highway``.
+   and the nodes tagged ``ele``.
 
 Memory: the node-location index (8–16 bytes per node of the file) and the
 motorway network.
@@ -52,7 +52,10 @@ class OsmWay:
     tags: tuple[tuple[str, str], ...]
 
     def tag(self, key: str, default: str | None = None) -> str | None:
-        return dict(self.tags).get(key, default)
+        for k, v in self.tags:  # (a handful of tags: no dict built per call)
+            if k == key:
+                return v
+        return default
 
 
 @dataclass
@@ -174,15 +177,20 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
                 if bbox is not None and not any(bbox[0] <= lon <= bbox[2] and bbox[1] <= lat <= bbox[3]
                                                  for _, lat, lon in pts):
                     continue
-                tags = {t.k: t.v for t in w.tags}
-                ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, tags[k]) for k in _KEEP_TAGS if k in tags))
+                tags = w.tags  # (only the kept keys are looked up, in libosmium)
+                ways[w.id] = OsmWay(w.id, tuple(nodes), tuple((k, v) for k in _KEEP_TAGS
+                                                              if (v := tags.get(k)) is not None))
                 for ref, lat, lon in pts:
                     coords[ref] = (lat, lon)
             needed = {n for w in ways.values() for n in w.nodes}
-            # 2. ordinary roads touching the network (exits) and the ele of network nodes
+            # 2. ordinary roads touching the network (exits) and the ele of network nodes: the
+            #    nodes tagged ele and the ways tagged highway reach Python. (libosmium's id
+            #    tracker would pick the ways holding a network node in C++, but its id set is
+            #    dense: ~1.5 GB for node ids spread over today's OSM id range.)
             if ways:
                 second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
-                    .with_filter(osmium.filter.KeyFilter("highway", "ele"))
+                    .with_filter(osmium.filter.KeyFilter("ele").enable_for(osmium.osm.NODE)) \
+                    .with_filter(osmium.filter.KeyFilter("highway").enable_for(osmium.osm.WAY))
                 for o in second:
                     if o.is_node():
                         if "ele" in o.tags and o.id in needed:

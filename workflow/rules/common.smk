@@ -12,7 +12,7 @@ from flyover.topology.io import TOPOLOGY_SUFFIXES
 validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
-TOPOLOGY_VERSION = 4  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader
+TOPOLOGY_VERSION = 5  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader; 5: OSM connectors between roads, ref-less carriageways paired by name, 3+ motorway link groups one interchange, direct ramps with geometry, self-check legs by carriageway pairs
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 5  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
