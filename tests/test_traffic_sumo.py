@@ -149,3 +149,18 @@ def test_auxiliary_lanes_leave_room_to_change_lanes(tmp_path):
     decel, accel = lengths["parallel"]
     assert decel >= opts.decel_length_m + opts.taper_length_m / 3
     assert accel >= opts.accel_length_m + opts.taper_length_m / 3
+
+
+def test_class_rows_follow_sample_and_density_whatever_the_run_order(t_net, tmp_path):
+    # runs start densest first (the longest first, for the workers' balance); the tables list
+    # them by sample, then density, the same bytes for one worker or two
+    s = ThroughputSettings(densities=(450.0, 900.0), duration_s=200.0, interval_s=20.0)
+    out = []
+    for workers in (1, 2):
+        rows = run_class([(1, t_net), (0, t_net)], "ct", s, tmp_path / f"{workers}.parquet",
+                         tmp_path / f"{workers}/series.parquet", workers=workers)
+        assert [(r["sample"], r["density_veh_h"]) for r in rows] == \
+            [(0, 450.0), (0, 900.0), (1, 450.0), (1, 900.0)]
+        out.append(((tmp_path / f"{workers}.parquet").read_bytes(),
+                    (tmp_path / f"{workers}/series.parquet").read_bytes()))
+    assert out[0] == out[1]
