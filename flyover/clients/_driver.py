@@ -30,6 +30,10 @@ def _verify(network, exclude=()):
 
     ``exclude``: formula ids (their string values) left out, e.g. the two
     ``potential_*_opposite_dir_parallel_adj`` formulas that take two thirds of its time.
+    A formula that raises (``left_right_boundary_assignment`` does, with a ``TypeError``,
+    on a lanelet whose curvilinear frame it cannot build: 1.9 km loop-ramp lanelets) is
+    ``crashed`` (formula → error, where) and the others still run; for that one formula
+    :func:`_boundary_sides` answers instead.
     """
     from crdesigner.verification_repairing.config import MapVerParams
     from crdesigner.verification_repairing.verification.formula_ids import extract_formula_ids
@@ -38,12 +42,9 @@ def _verify(network, exclude=()):
 
     config = MapVerParams()
     every = [f for f in extract_formula_ids() if getattr(f, "value", str(f)) not in set(exclude)]
-    counts, examples, locations_of = {}, {}, {}
-    groups = GroupsHandler()
-    while groups.is_next_group():
-        formulas = sorted(set(every) & set(groups.next_group()), key=str)
-        if not formulas:
-            continue
+    counts, examples, locations_of, crashed = {}, {}, {}, {}
+
+    def run(formulas):
         config.verification.formulas = formulas
         for fid, locations in MapVerifier(network, config).verify().items():
             key = getattr(fid, "value", str(fid))
@@ -51,9 +52,45 @@ def _verify(network, exclude=()):
             locations_of.setdefault(key, []).extend(locations)
             examples.setdefault(key, [list(map(int, loc)) if isinstance(loc, tuple) else int(loc)
                                       for loc in locations[:3]])
-    return {"ok": True, "errors": counts, "examples": examples, "formulas": len(every),
-            "connection_gaps_m": _connection_gaps(network, locations_of),
-            "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+
+    groups = GroupsHandler()
+    while groups.is_next_group():
+        formulas = sorted(set(every) & set(groups.next_group()), key=str)
+        if not formulas:
+            continue
+        try:
+            run(formulas)
+        except Exception:  # noqa: BLE001 - one formula's crash is reported, the rest still run
+            for f in formulas:  # again one by one, to know which (a group's results are lost)
+                try:
+                    run([f])
+                except Exception as e:  # noqa: BLE001
+                    crashed[getattr(f, "value", str(f))] = _failure(e)
+    out = {"ok": True, "errors": counts, "examples": examples, "formulas": len(every),
+           "crashed": crashed,
+           "connection_gaps_m": _connection_gaps(network, locations_of),
+           "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+    if "left_right_boundary_assignment" in crashed:
+        out["boundary_sides"] = _boundary_sides(network)
+    return out
+
+
+def _boundary_sides(network):
+    """Lanelets whose left boundary is not left of their right one somewhere (where the
+    lanelet is wider than 1 mm): what ``left_right_boundary_assignment`` asks, by the
+    sign of the cross product of the centre line's direction and right → left."""
+    import numpy as np
+
+    wrong = []
+    for ll in network.lanelets:
+        c = ll.center_vertices
+        d = np.gradient(c, axis=0)
+        v = ll.left_vertices - ll.right_vertices
+        cross = d[:, 0] * v[:, 1] - d[:, 1] * v[:, 0]
+        wide = np.linalg.norm(v, axis=1) > 1e-3
+        if (cross[wide] <= 0).any():
+            wrong.append(int(ll.lanelet_id))
+    return {"lanelets": len(network.lanelets), "wrong": wrong}
 
 
 def _connection_gaps(network, locations_of):
