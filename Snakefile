@@ -41,6 +41,7 @@ rule all:
         "results/geometry.parquet",
         class_tables("export"),
         "results/validation.parquet",
+        "results/clients_sample.parquet",
         "results/throughput.parquet",
         "results/throughput_stats.parquet",
         plugin_class_tables,

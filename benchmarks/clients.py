@@ -6,6 +6,9 @@ Usage::
     .venv/bin/python benchmarks/clients.py --variants 0 1 --verify
     .venv/bin/python benchmarks/clients.py --designs trumpet j1 --verify
     .venv/bin/python benchmarks/clients.py --xodr old/*.xodr --verify   # files as they are
+    .venv/bin/python benchmarks/clients.py --attribution --no-clients   # where verifier errors come from
+    .venv/bin/python benchmarks/clients.py --verify --exclude potential_left_opposite_dir_parallel_adj \
+        potential_right_opposite_dir_parallel_adj             # the main job's sample formulas
 
 Each catalog design is laid out with fixed features (``flyover.clients.designs``)
 and written with the current writer; ``--xodr`` takes existing files instead
@@ -18,7 +21,11 @@ pyxodr. Printed per interchange: seconds per client, verifier errors per
 type with the largest boundary gap of the flagged links in the converted map,
 our own lanes left unlinked and our largest lane-border gap at road links
 (from the .xodr), and whether Lanelet2 routes exactly the topology's
-movements. Then the totals per error type and mean/max seconds per client.
+movements. ``--attribution``: the verifier's connection, adjacency and
+polyline formulas re-evaluated on the conversion as it is, with its 1 mm
+rounding of s neutralised, and with its join/split step neutralised too (the
+tests check that the first equals the verifier's counts). Then the totals per
+error type and mean/max seconds per client.
 """
 
 from __future__ import annotations
@@ -43,6 +50,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", nargs="*", type=int, default=[0])
     ap.add_argument("--xodr", nargs="*", default=None, help="run on these files as they are")
     ap.add_argument("--verify", action="store_true", help="also run CommonRoad's map verifier")
+    ap.add_argument("--exclude", nargs="*", default=[], help="verifier formulas left out")
+    ap.add_argument("--attribution", action="store_true",
+                    help="verifier formulas with the converter's own steps neutralised")
+    ap.add_argument("--no-clients", action="store_true",
+                    help="only the conversion (and what is asked): no Lanelet2, pyopendrive, pyxodr")
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="flyover-clients-"))
     items = []  # (label, path, geometry or None)
@@ -55,12 +67,16 @@ def main(argv: list[str] | None = None) -> int:
                 path = tmp / f"{name}_{v}.xodr"
                 path.write_bytes(xodr_bytes(g))
                 items.append((f"{name}_{v}", path, g))
-    jobs = [{"xodr": p, "commonroad": tmp / f"{lab}.cr.xml", "lanelet2": tmp / f"{lab}.osm",
-             "verify": args.verify, "routing": True, "pyopendrive": True, "pyxodr": True}
-            for lab, p, _ in items]
+    full = not args.no_clients
+    jobs = [{"xodr": p, "commonroad": full and tmp / f"{lab}.cr.xml",
+             "lanelet2": full and tmp / f"{lab}.osm", "verify": args.verify,
+             "verify_exclude": args.exclude, "attribution": args.attribution, "routing": full,
+             "pyopendrive": full, "pyxodr": full} for lab, p, _ in items]
     answers = run_clients(jobs)
     seconds: dict[str, list[float]] = {}
     totals: dict[str, int] = {}
+    attributed: dict[str, dict[str, int]] = {}
+    rounding_max = 0.0
     converted = routed_ok = 0
     for (label, path, g), a in zip(items, answers):
         net = read_xodr(path)
@@ -73,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"our max link gap {max(gaps, default=0.0):.1e} m"]
         if not conv["ok"]:
             line.append(f"CONVERSION FAILED {conv['error']} at {conv['where']}")
-        else:
+        elif full:
             ll2 = a["lanelet2"]
             line.append(f"lanelets {conv['lanelets']:>3}")
             line.append(f"ll2 {'ok' if ll2.get('ok') and not ll2.get('routing_errors') else 'FAIL'}")
@@ -87,6 +103,22 @@ def main(argv: list[str] | None = None) -> int:
                     line.append(f"missing {sorted(wanted - routed)} extra {sorted(extra)} "
                                 f"(two movements through {sorted(set(trips.values()))}: "
                                 f"{len(trips)}/{len(extra)})")
+        if conv["ok"] and args.attribution:
+            at = a["attribution"]
+            if at["ok"]:
+                for variant in ("stock", "exact_s", "exact_s_no_join_split"):
+                    tot = attributed.setdefault(variant, {})
+                    for k, n in at[variant]["errors"].items():
+                        tot[k] = tot.get(k, 0) + n
+                rounding_max = max(rounding_max, at["rounding_max_gap_m"])
+                line.append("formulas as converted {} / exact s {} / exact s, no join-split {}; "
+                            "rounding errors {} (largest gap {:.1e} m)".format(
+                                at["stock"]["errors"], at["exact_s"]["errors"],
+                                at["exact_s_no_join_split"]["errors"], at["rounding_errors"],
+                                at["rounding_max_gap_m"]))
+            else:
+                line.append(f"attribution FAILED {at['error']}")
+        if conv["ok"]:
             if args.verify:
                 v = a["verifier"]
                 if v["ok"]:
@@ -99,15 +131,20 @@ def main(argv: list[str] | None = None) -> int:
                                     " .. {width_end_m:.3f} m, least inside {min_inner_width_m}".format(**it))
                 else:
                     line.append(f"verifier FAILED {v['error']}")
-        line.append(f"pyopendrive {'ok' if a['pyopendrive']['ok'] else 'FAIL'}")
-        line.append(f"pyxodr {'ok' if a['pyxodr']['ok'] else 'FAIL'}")
+        if full:
+            line.append(f"pyopendrive {'ok' if a['pyopendrive']['ok'] else 'FAIL'}")
+            line.append(f"pyxodr {'ok' if a['pyxodr']['ok'] else 'FAIL'}")
         line.append("s: " + " ".join(f"{k} {s:.1f}" for k, s in a["seconds"].items()))
         print("  ".join(line), flush=True)
     n = len(items)
     print(f"\nconverted {converted}/{n}" + (f"; Lanelet2 routes == movements {routed_ok}/{n}"
-                                            if not args.xodr else ""))
+                                            if full and not args.xodr else ""))
     if args.verify:
         print("verifier errors per type (all files):", dict(sorted(totals.items())))
+    for variant, tot in attributed.items():
+        print(f"formulas, {variant}: {dict(sorted(tot.items()))}")
+    if attributed:
+        print(f"largest gap of an error that the 1 mm rounding alone makes: {rounding_max:.2e} m")
     for k, v in seconds.items():
         print(f"{k:<12} mean {statistics.mean(v):6.1f} s  max {max(v):6.1f} s per interchange")
     return 0

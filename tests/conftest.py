@@ -30,7 +30,8 @@ def j1() -> Topology:
 
 def pytest_collection_modifyitems(config, items):
     """Tests marked ``verifier`` run only when ``-m`` names that marker (CommonRoad's map
-    verifier takes minutes per interchange; CI runs every other client test)."""
+    verifier with every formula, minutes an interchange; CI runs it with two formulas left
+    out, ``test_clients_verifier_*.py``)."""
     import re  # noqa: PLC0415
 
     if re.search(r"(?<!not )\bverifier\b", config.getoption("markexpr") or ""):

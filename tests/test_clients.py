@@ -5,31 +5,19 @@ and pyxodr, all real, from their own environment (``.venv-clients``, made by
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 from lxml import etree
 
 from flyover.clients.designs import catalog_geometry, catalog_names
 from flyover.clients.links import dangling_lanes, link_gaps
 from flyover.clients.tools import ClientsError, find_clients_python, routed_movements, run_clients, \
-    setup_clients_venv, two_movement_trips
+    two_movement_trips
 from flyover.geometry.model import write_geometry
 from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.validate import movements
-from flyover.opendrive.writer import xodr_bytes
+from tests.clients_support import TOLERANCE_M, check_verifier, clients_python, write_design  # noqa: F401
 
-#: verifier error types that come from the client, not from our geometry: linked lanelets
-#: whose boundary points differ by more than its 1e-8 m after its conversion (which moves
-#: the borders of lanes opening from or closing to zero width) while ours meet within
-#: TOLERANCE_M at every link (measured from the .xodr itself); bounds that "intersect"
-#: only where a lane is zero wide by design (the end of a taper)
-TOLERANCE_TYPES = {"polylines_intersection", "connections_predecessor", "connections_successor",
-                   "connections_left_forking_adj", "connections_right_forking_adj",
-                   "connections_left_merging_adj", "connections_right_merging_adj"}
-TOLERANCE_M = 1e-6
 #: movements Lanelet2 does not route (design, feature set): the Lanelet2 export of
 #: commonroad-scenario-designer 0.8.5 starts the deceleration lane's lanelet where no
 #: lanelet ends (CommonRoad's own map gives it its predecessor), so no route leads onto
@@ -39,32 +27,8 @@ TOLERANCE_M = 1e-6
 LANELET2_MISSES = {("j1", 0): {("R2", "R4")}, ("j1", 1): {("R2", "R4")}}
 
 
-def _registry_reachable() -> bool:
-    res = subprocess.run([sys.executable, "-m", "pip", "index", "versions", "lanelet2"],
-                         capture_output=True, text=True, timeout=120)
-    return res.returncode == 0
-
-
-@pytest.fixture(scope="session")
-def clients_python():
-    try:
-        return find_clients_python()
-    except ClientsError:
-        pass
-    try:
-        return setup_clients_venv()
-    except (ClientsError, subprocess.CalledProcessError) as e:
-        if not _registry_reachable():
-            pytest.skip(f"clients' environment not installed and the package registry is "
-                        f"unreachable ({e})")
-        raise
-
-
 def _write(tmp_path, name, variant=0):
-    g = catalog_geometry(name, variant)
-    path = tmp_path / f"{name}_{variant}.xodr"
-    path.write_bytes(xodr_bytes(g))
-    return g, path
+    return write_design(tmp_path, name, variant)
 
 
 # -- lane links, from our own files (no clients) -------------------------------------------
@@ -105,8 +69,8 @@ def test_gore_shoulder_opens_from_zero_width_inside_the_junction(tmp_path):
 @pytest.fixture(scope="module")
 def sample(tmp_path_factory, clients_python):
     """One T (the designs whose conversion crashed) through every client but CommonRoad's map
-    verifier (10-150 s an interchange: it runs on every design in
-    :func:`test_every_catalog_design_passes_every_client`, marked slow)."""
+    verifier (1-2 min an interchange: it runs on every design in the slow
+    ``test_clients_verifier_*.py``)."""
     tmp = tmp_path_factory.mktemp("clients")
     g, path = _write(tmp, "semidirectional_t")
     [answer] = run_clients([{"xodr": path, "commonroad": tmp / "map.cr.xml",
@@ -133,12 +97,6 @@ def test_lanelet2_routes_exactly_the_movements_of_the_topology(sample):
     routed = routed_movements(a["lanelet2"], read_xodr(path))
     assert set(routed) == set(movements(g))
     assert all(n > 0 for n in routed.values())
-
-
-def _bounds_touch_only_at_zero_width(verifier):
-    for it in verifier["intersections"]:
-        assert min(it["width_start_m"], it["width_end_m"]) < 1e-6, it
-        assert it["min_inner_width_m"] is None or it["min_inner_width_m"] > 0, it
 
 
 def test_pyopendrive_and_pyxodr_read_every_road_and_lane(sample):
@@ -183,7 +141,7 @@ def test_export_without_the_client_environment_fails_naming_it_and_writes_nothin
 def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name, variant):
     """Every design, two feature sets, through CommonRoad's conversion (written and read
     back), Lanelet2 (load, routing graph, routes), pyopendrive and pyxodr. CommonRoad's map
-    verifier (1-4 min an interchange here) is the opt-in test below."""
+    verifier is in ``test_clients_verifier_*.py`` (feature set 0) and the opt-in test below."""
     g, path = _write(tmp_path, name, variant)
     [a] = run_clients([{"xodr": path, "commonroad": tmp_path / "m.xml",
                         "lanelet2": tmp_path / "m.osm", "verify": False, "routing": True,
@@ -201,14 +159,8 @@ def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name
 @pytest.mark.verifier
 @pytest.mark.parametrize("variant", [0, 1])
 @pytest.mark.parametrize("name", catalog_names())
-def test_commonroad_verifier_reports_only_tolerance_errors(tmp_path, clients_python, name, variant):
-    """CommonRoad's map verifier on every design (opt-in: ``-m verifier``; 1-4 min an
-    interchange): only the error types that are the conversion's tolerance, not gaps in our
-    file (README "Compatibility"), and bounds that touch only where a lane is zero wide."""
-    g, path = _write(tmp_path, name, variant)
-    [a] = run_clients([{"xodr": path, "verify": True}], python=clients_python)
-    assert a["verifier"]["ok"], a["verifier"]
-    assert set(a["verifier"]["errors"]) <= TOLERANCE_TYPES, a["verifier"]["errors"]
-    assert max(gap for *_, gap in link_gaps(read_xodr(path))) < TOLERANCE_M
-    _bounds_touch_only_at_zero_width(a["verifier"])
-
+def test_commonroad_verifier_with_every_formula(tmp_path, clients_python, name, variant):
+    """The slow verifier test (``test_clients_verifier_*.py``: feature set 0, two formulas
+    left out) with every formula on both feature sets: opt-in (``-m verifier``; 1-2 min a
+    T interchange, far more on a cloverleaf)."""
+    check_verifier(tmp_path, clients_python, name, variant)

@@ -1,8 +1,9 @@
 """Run inside the clients' environment (``.venv-clients``); never imported by flyover.
 
 Reads one JSON request from stdin: ``{"jobs": [{"xodr": path, "commonroad": path|null,
-"lanelet2": path|null, "verify": bool, "routing": bool, "pyopendrive": bool,
-"pyxodr": bool}, ...]}`` and prints one JSON line per job, in order. Each client
+"lanelet2": path|null, "verify": bool, "verify_exclude": [formula id, ...],
+"attribution": bool, "routing": bool, "pyopendrive": bool, "pyxodr": bool}, ...]}``
+and prints one JSON line per job, in order. Each client
 runs in its own ``try``: one failure is reported (type, message, where) and the
 others still run.
 """
@@ -10,6 +11,7 @@ others still run.
 import contextlib
 import json
 import logging
+import os
 import sys
 import time
 import traceback
@@ -23,21 +25,26 @@ def _failure(e):
     return {"ok": False, "error": f"{type(e).__name__}: {e}", "where": where}
 
 
-def _verify(network):
-    """The map verifier's invalid states per formula, verification only (no repair)."""
+def _verify(network, exclude=()):
+    """The map verifier's invalid states per formula, verification only (no repair).
+
+    ``exclude``: formula ids (their string values) left out, e.g. the two
+    ``potential_*_opposite_dir_parallel_adj`` formulas that take two thirds of its time.
+    A formula that raises (``left_right_boundary_assignment`` does, with a ``TypeError``,
+    on a lanelet whose curvilinear frame it cannot build: 1.9 km loop-ramp lanelets) is
+    ``crashed`` (formula → error, where) and the others still run; for that one formula
+    :func:`_boundary_sides` answers instead.
+    """
     from crdesigner.verification_repairing.config import MapVerParams
     from crdesigner.verification_repairing.verification.formula_ids import extract_formula_ids
     from crdesigner.verification_repairing.verification.groups_handler import GroupsHandler
     from crdesigner.verification_repairing.verification.map_verifier import MapVerifier
 
     config = MapVerParams()
-    every = list(extract_formula_ids())
-    counts, examples, locations_of = {}, {}, {}
-    groups = GroupsHandler()
-    while groups.is_next_group():
-        formulas = sorted(set(every) & set(groups.next_group()), key=str)
-        if not formulas:
-            continue
+    every = [f for f in extract_formula_ids() if getattr(f, "value", str(f)) not in set(exclude)]
+    counts, examples, locations_of, crashed = {}, {}, {}, {}
+
+    def run(formulas):
         config.verification.formulas = formulas
         for fid, locations in MapVerifier(network, config).verify().items():
             key = getattr(fid, "value", str(fid))
@@ -45,9 +52,45 @@ def _verify(network):
             locations_of.setdefault(key, []).extend(locations)
             examples.setdefault(key, [list(map(int, loc)) if isinstance(loc, tuple) else int(loc)
                                       for loc in locations[:3]])
-    return {"ok": True, "errors": counts, "examples": examples,
-            "connection_gaps_m": _connection_gaps(network, locations_of),
-            "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+
+    groups = GroupsHandler()
+    while groups.is_next_group():
+        formulas = sorted(set(every) & set(groups.next_group()), key=str)
+        if not formulas:
+            continue
+        try:
+            run(formulas)
+        except Exception:  # noqa: BLE001 - one formula's crash is reported, the rest still run
+            for f in formulas:  # again one by one, to know which (a group's results are lost)
+                try:
+                    run([f])
+                except Exception as e:  # noqa: BLE001
+                    crashed[getattr(f, "value", str(f))] = _failure(e)
+    out = {"ok": True, "errors": counts, "examples": examples, "formulas": len(every),
+           "crashed": crashed,
+           "connection_gaps_m": _connection_gaps(network, locations_of),
+           "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+    if "left_right_boundary_assignment" in crashed:
+        out["boundary_sides"] = _boundary_sides(network)
+    return out
+
+
+def _boundary_sides(network):
+    """Lanelets whose left boundary is not left of their right one somewhere (where the
+    lanelet is wider than 1 mm): what ``left_right_boundary_assignment`` asks, by the
+    sign of the cross product of the centre line's direction and right → left."""
+    import numpy as np
+
+    wrong = []
+    for ll in network.lanelets:
+        c = ll.center_vertices
+        d = np.gradient(c, axis=0)
+        v = ll.left_vertices - ll.right_vertices
+        cross = d[:, 0] * v[:, 1] - d[:, 1] * v[:, 0]
+        wide = np.linalg.norm(v, axis=1) > 1e-3
+        if (cross[wide] <= 0).any():
+            wrong.append(int(ll.lanelet_id))
+    return {"lanelets": len(network.lanelets), "wrong": wrong}
 
 
 def _connection_gaps(network, locations_of):
@@ -103,6 +146,138 @@ def _intersections(network, locations):
                     "width_start_m": float(w[0]), "width_end_m": float(w[-1]),
                     "min_inner_width_m": float(w[1:-1].min()) if len(w) > 2 else None})
     return out
+
+
+#: CommonRoad's ``are_equal_vertices`` (verification/hol/functions/predicates/lanelet_predicates.py):
+#: two boundary points are "equal" when closer than this, whatever ``connection_thresh`` says
+EQUAL_VERTICES_M = 1e-5
+
+
+def _adjacency_type(lanelet, adj, is_left):
+    """The verifier's ``is_adj_type``: parallel, merging or forking, from end-point distances."""
+    import numpy as np
+
+    same = lanelet.adj_left_same_direction if is_left else lanelet.adj_right_same_direction
+    if not same:
+        return "parallel"
+    ap = adj.right_vertices if is_left else adj.left_vertices
+    ls, le = (float(np.linalg.norm(lanelet.left_vertices[i] - ap[i])) for i in (0, -1))
+    rs, re = (float(np.linalg.norm(lanelet.right_vertices[i] - ap[i])) for i in (0, -1))
+    if ls > rs and le < re:
+        return "forking" if is_left else "merging"
+    if ls < rs and le > re:
+        return "merging" if is_left else "forking"
+    return "parallel"
+
+
+def formula_errors(network):
+    """The verifier's connection, adjacency and ``polylines_intersection`` formulas, re-evaluated.
+
+    Same predicates and threshold as its HOL formulas (:data:`EQUAL_VERTICES_M`), in
+    milliseconds instead of minutes: ``{formula: [(where, gap_m), ...]}`` where ``where``
+    is the flagged lanelet's left boundary point the formula looks at (lanelet ids differ
+    from one conversion to the next) and ``gap_m`` the largest distance between the
+    points the formula wants equal (for ``polylines_intersection``: the lanelet's least
+    width at its two ends).
+    """
+    import numpy as np
+    from shapely.geometry import LineString
+
+    by_id = {ll.lanelet_id: ll for ll in network.lanelets}
+    out = {}
+    norm = lambda v: float(np.linalg.norm(v))  # noqa: E731
+    for ll in network.lanelets:
+        for key, others, mine, theirs in (("connections_successor", ll.successor, -1, 0),
+                                          ("connections_predecessor", ll.predecessor, 0, -1)):
+            for oid in others:
+                o = by_id.get(oid)
+                if o is None:
+                    continue
+                gap = max(norm(ll.left_vertices[mine] - o.left_vertices[theirs]),
+                          norm(ll.right_vertices[mine] - o.right_vertices[theirs]))
+                if gap >= EQUAL_VERTICES_M:
+                    out.setdefault(key, []).append((ll.left_vertices[mine], gap))
+        for side in ("left", "right"):
+            a = by_id.get(getattr(ll, f"adj_{side}"))
+            if a is None:
+                continue
+            kind = _adjacency_type(ll, a, side == "left")
+            if kind == "parallel":
+                continue
+            at, other = (0, -1) if kind == "forking" else (-1, 0)
+            # forking: both start points equal, the far end on the neighbour's border;
+            # merging: both end points equal, the near start on the neighbour's border
+            far = (ll.left_vertices[other] - a.right_vertices[other] if side == "left"
+                   else ll.right_vertices[other] - a.left_vertices[other])
+            gap = max(norm(ll.left_vertices[at] - a.left_vertices[at]),
+                      norm(ll.right_vertices[at] - a.right_vertices[at]), norm(far))
+            if gap >= EQUAL_VERTICES_M:
+                out.setdefault(f"connections_{side}_{kind}_adj", []).append(
+                    (ll.left_vertices[other], gap))
+        if not LineString(ll.left_vertices).intersection(LineString(ll.right_vertices)).is_empty:
+            w = np.linalg.norm(ll.left_vertices - ll.right_vertices, axis=1)
+            out.setdefault("polylines_intersection", []).append(
+                (ll.left_vertices[0], min(float(w[0]), float(w[-1]))))
+    return out
+
+
+@contextlib.contextmanager
+def _converter_steps(exact_s, join_split):
+    """The converter with two of its own steps neutralised, to tell their errors from ours.
+
+    ``exact_s``: its lane borders call ``PlanView.calc(..., is_last_pos=...)``, a keyword
+    the plan view does not take; the ``TypeError`` falls back to evaluating the
+    reference line at ``s`` rounded to 1 mm (``border.py``), so a road whose length is
+    not a whole millimetre ends up to 0.5 mm off. ``exact_s`` accepts the keyword.
+    ``join_split``: False skips ``join_and_split_possible_lanes``, which re-draws the
+    borders of lanes that open from (close to) zero width by mirroring a neighbour.
+    """
+    import crdesigner.map_conversion.common.conversion_lanelet_network as cln
+    from crdesigner.map_conversion.opendrive.odr2cr.opendrive_parser.elements.roadPlanView import \
+        PlanView
+
+    calc, js = PlanView.calc, cln.ConversionLaneletNetwork.join_and_split_possible_lanes
+    if exact_s:
+        PlanView.calc = lambda self, s_pos, compute_curvature=True, reverse=True, is_last_pos=False: \
+            calc(self, s_pos, compute_curvature, reverse)
+    if not join_split:
+        cln.ConversionLaneletNetwork.join_and_split_possible_lanes = lambda self: None
+    try:
+        yield
+    finally:
+        PlanView.calc, cln.ConversionLaneletNetwork.join_and_split_possible_lanes = calc, js
+
+
+def _attribute(path, stock_network):
+    """The formulas' errors on the stock conversion and with the converter's own steps
+    neutralised (:func:`_converter_steps`): which step each error comes from.
+
+    ``rounding_max_gap_m``: the largest gap among the stock errors that neutralising
+    the 1 mm rounding alone removes (matched by place, within 5 cm).
+    """
+    import numpy as np
+    from crdesigner.map_conversion.map_conversion_interface import opendrive_to_commonroad
+
+    out = {}
+    for name, exact_s, join_split in (("stock", False, True), ("exact_s", True, True),
+                                      ("exact_s_no_join_split", True, False)):
+        if name == "stock":
+            net = stock_network
+        else:
+            with _converter_steps(exact_s, join_split):
+                net = opendrive_to_commonroad(path).lanelet_network
+        errs = formula_errors(net)
+        out[name] = {"errors": {k: len(v) for k, v in errs.items()},
+                     "max_gap_m": {k: max(g for _, g in v) for k, v in errs.items()}}
+        if name == "stock":
+            stock = errs
+        elif name == "exact_s":
+            # the errors that the 1 mm rounding alone made: their largest gap
+            gone = [g for k, v in stock.items() for p, g in v
+                    if not any(np.linalg.norm(p - q) < 0.05 for q, _ in errs.get(k, []))]
+            out["rounding_max_gap_m"] = max(gone, default=0.0)
+            out["rounding_errors"] = len(gone)
+    return {"ok": True, **out}
 
 
 def _write_commonroad(scenario, path):
@@ -208,7 +383,8 @@ def run(job):
         except Exception as e:  # noqa: BLE001
             res["pyxodr"] = _failure(e)
         res["seconds"]["pyxodr"] = time.perf_counter() - t
-    if not (job.get("commonroad") or job.get("lanelet2") or job.get("verify")):
+    if not (job.get("commonroad") or job.get("lanelet2") or job.get("verify")
+            or job.get("attribution")):
         return res
     from crdesigner.map_conversion.map_conversion_interface import opendrive_to_commonroad
 
@@ -223,8 +399,11 @@ def run(job):
         res["seconds"]["conversion"] = time.perf_counter() - t
     for key, fn in (("commonroad", lambda: _write_commonroad(scenario, job["commonroad"])),
                     ("lanelet2", lambda: _lanelet2(scenario, job["lanelet2"], job.get("routing"))),
-                    ("verifier", lambda: _verify(scenario.lanelet_network))):
-        if key == "verifier" and not job.get("verify") or key != "verifier" and not job.get(key):
+                    ("verifier", lambda: _verify(scenario.lanelet_network,
+                                                 job.get("verify_exclude", ()))),
+                    ("attribution", lambda: _attribute(job["xodr"], scenario.lanelet_network))):
+        wanted = job.get("verify") if key == "verifier" else job.get(key)
+        if not wanted:
             continue
         t = time.perf_counter()
         try:
@@ -241,9 +420,13 @@ def main():
     warnings.filterwarnings("ignore")
     logging.disable(logging.WARNING)
     request = json.load(sys.stdin)
-    out = sys.stdout
+    # the answers get the real stdout to themselves: the clients' progress, from Python
+    # or from their C++ parts (which bypass sys.stdout), goes to stderr
+    sys.stdout.flush()
+    out = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
     for job in request["jobs"]:
-        with contextlib.redirect_stdout(sys.stderr):  # the clients print progress
+        with contextlib.redirect_stdout(sys.stderr):
             res = run(job)
         out.write(json.dumps(res, default=str) + "\n")
         out.flush()

@@ -212,6 +212,43 @@ def _const(w: float) -> Cubic:
     return Cubic(0.0, w, 0.0, 0.0, 0.0)
 
 
+#: in a connecting road, a lane that opens from (closes to) zero width over its whole lane
+#: section reaches its full width (begins to close) within this fraction of the section and
+#: keeps it for the rest: a second width record. Link-following converters (CommonRoad's)
+#: re-draw such a lane up to the first place where its width stops changing; at the
+#: section's end that was the link itself, which they then moved by up to 2 m.
+JUNCTION_TAPER_FRACTION = 2.0 / 3.0
+
+
+def _junction_widths(w: Cubic, length: float) -> tuple[Cubic, ...]:
+    """``w`` as width records of a connecting road's lane section of ``length`` m.
+
+    A smooth full-section opening (``0 → W``) or closing (``W → 0``) becomes a smooth
+    step over :data:`JUNCTION_TAPER_FRACTION` of the section and a constant part (same
+    widths at both ends, so links are unchanged); any other width stays one record.
+
+    >>> [(c.s, round(c.a, 3)) for c in _junction_widths(_rising(3.0, 15.0), 15.0)]
+    [(0.0, 0.0), (10.0, 3.0)]
+    >>> [(c.s, round(c.a, 3)) for c in _junction_widths(_change(3.0, 0.0, 15.0), 15.0)]
+    [(0.0, 3.0), (5.0, 3.0)]
+    """
+    T = JUNCTION_TAPER_FRACTION * length
+    if length <= 0 or w.b != 0.0:
+        return (w,)
+    w_end = float(w(length))
+    if abs(w.a) < 1e-9 and abs(w_end) > 1e-9:
+        full, step = w_end, _rising(w_end, length)
+        if math.isclose(w.c, step.c, rel_tol=1e-9) and math.isclose(w.d, step.d, rel_tol=1e-9):
+            r = _rising(full, T)
+            return (r, Cubic(T, full, 0.0, 0.0, 0.0))
+    if abs(w_end) < 1e-9 and abs(w.a) > 1e-9:
+        step = _change(w.a, 0.0, length)
+        if math.isclose(w.c, step.c, rel_tol=1e-9) and math.isclose(w.d, step.d, rel_tol=1e-9):
+            c = _change(w.a, 0.0, T)
+            return (_const(w.a), Cubic(length - T, c.a, c.b, c.c, c.d))
+    return (w,)
+
+
 def _elements(g: InterchangeGeometry, opts: ExportOptions) -> dict[str, _Element]:
     els: dict[str, _Element] = {}
     for r in g.roads:
@@ -857,7 +894,8 @@ def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict)
                     etree.SubElement(ln, "predecessor", id=str(pred))
                 if succ is not None:
                     etree.SubElement(ln, "successor", id=str(succ))
-            etree.SubElement(lane, "width", **_cubic_attrs(w, "sOffset"))
+            for rec in (_junction_widths(w, sec_len) if p.junction is not None else (w,)):
+                etree.SubElement(lane, "width", **_cubic_attrs(rec, "sOffset"))
             etree.SubElement(lane, "roadMark", sOffset="0.0",
                              type="solid" if key[0] == "sh" or i == len(lanes) - 2 else "broken",
                              weight="standard", color="white", width="0.15",

@@ -80,6 +80,30 @@ rule validation:
         "../scripts/export_validation_table.py"
 
 
+rule clients_sample:
+    """CommonRoad's conversion and map verifier on one interchange of the run (seeded)."""
+    input:
+        exports=class_tables("export"),
+    output:
+        table="results/clients_sample.parquet",
+    log:
+        "logs/clients_sample.log",
+    conda:
+        "../envs/flyover.yaml"
+    params:
+        version=CLIENTS_SAMPLE_VERSION,
+        sample=config["validation"]["clients_sample"],
+    threads: 1
+    # measured: see README "Compatibility" (CPU of one conversion and verification)
+    resources:
+        mem_mb=1500,
+        runtime=10,
+    benchmark:
+        "logs/benchmarks/clients_sample.tsv"
+    script:
+        "../scripts/clients_sample.py"
+
+
 rule export:
     """Target: the export stage (every interchange's files) and the validation table."""
     input:
