@@ -31,6 +31,20 @@ def test_the_sample_is_seeded_order_free_and_only_among_exported_interchanges(tm
     assert pick_sample([b], seed=7) is None
 
 
+def test_with_a_size_the_sample_is_among_the_smallest_tenth(tmp_path):
+    # the verifier's time grows with the square of the lanelets: the main job's sample is one
+    # of the smallest interchanges, still seeded and order-free
+    c = _export_table(tmp_path / "c.parquet", "c000000000c", range(40))
+    d = _export_table(tmp_path / "d.parquet", "c000000000d", range(30))
+    size = {("c000000000c", s): 1000.0 + s for s in range(40)}
+    size.update({("c000000000d", s): 500.0 + 100 * s for s in range(30)})
+    picks = {pick_sample([c, d], seed=s, size=lambda k, n: size[(k, n)]) for s in range(40)}
+    smallest = set(sorted(size, key=size.get)[:7])  # 70 interchanges: the smallest 7
+    assert len(picks) > 1 and picks <= smallest
+    assert pick_sample([d, c], seed=3, size=lambda k, n: size[(k, n)]) == \
+        pick_sample([c, d], seed=3, size=lambda k, n: size[(k, n)])
+
+
 def test_without_the_clients_environment_the_rows_say_skipped_and_where_to_get_it(
         tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("FLYOVER_CLIENTS_PYTHON", str(tmp_path / "nope" / "python"))

@@ -16,7 +16,7 @@ TOPOLOGY_VERSION = 5  # 2: representative.graphml per class; 3: safe names, FLYO
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 6  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout; 6: connecting roads taper over 2/3 of the section (CommonRoad)
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
-CLIENTS_SAMPLE_VERSION = 1  # 1: CommonRoad's map verifier on one seeded interchange
+CLIENTS_SAMPLE_VERSION = 2  # 1: CommonRoad's map verifier on one seeded interchange; 2: among the smallest tenth
 
 
 wildcard_constraints:
