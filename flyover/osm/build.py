@@ -874,7 +874,7 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
         try:
             with gc_paused(), multiprocessing.get_context("fork").Pool(workers, initializer=gc.enable) as pool:
                 results = pool.map(_build_inherited_place, range(len(places)),
-                                   chunksize=max(1, len(places) // (8 * workers)))
+                                   chunksize=max(1, len(places) // (32 * workers)))
         finally:
             _PLACES = None
             gc.unfreeze()
