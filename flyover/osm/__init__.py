@@ -43,12 +43,12 @@ def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = No
     node id); ``topology.attrs["osm"]`` carries the geometry for
     :func:`flyover.osm.plot.plot_osm_topology`, ramps carry ``length_m``,
     ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``). ``workers`` > 1
-    (default ``options.workers``) builds the places of a large extract in that many
-    processes (the same result).
+    (default ``options.workers``) reads the extract's second pass and builds the places
+    of a large extract in that many processes (the same result).
     """
     options = options or default_options()
     workers = options.workers if workers is None else workers
-    net = read_motorway_network(path, options.highways, options.bbox)
+    net = read_motorway_network(path, options.highways, options.bbox, workers=workers)
     if not net.ways:
         where = " inside the bbox" if options.bbox else ""
         raise InputFormatError(f"no {' or '.join(sorted(options.highways))} way{where}: "

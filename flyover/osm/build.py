@@ -51,7 +51,7 @@ from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
 from flyover.topology.names import MAX_NAME_LENGTH, safe_name
 
-__all__ = ["OsmOptions", "build_topologies", "interchange_name"]
+__all__ = ["OsmOptions", "build_topologies", "interchange_name", "split_network", "place_way_ids"]
 
 log = logging.getLogger(__name__)
 
@@ -861,29 +861,30 @@ def build_topologies(net: OsmNetwork, options: OsmOptions, workers: int = 1) -> 
     """
     out, failed = [], []
     with gc_paused():
-        parts = split_network(net, options)
-    if workers > 1 and len(parts) > 1:
+        places = place_way_ids(net, options)
+    if workers > 1 and len(places) > 1:
         import multiprocessing  # noqa: PLC0415
 
-        global _PARTS  # noqa: PLW0603 (inherited by the forked workers, not pickled to them)
-        _PARTS = (parts, options)
+        global _PLACES  # noqa: PLW0603 (inherited by the forked workers, not pickled to them)
+        _PLACES = (net, places, options)
         # the workers inherit the whole network: frozen, their garbage collector does not walk
         # it again and again (that made the build grow faster than the extract); the parent
-        # only collects results meanwhile
+        # only collects results meanwhile. Each worker cuts its places out of the network.
         gc.freeze()
         try:
             with gc_paused(), multiprocessing.get_context("fork").Pool(workers, initializer=gc.enable) as pool:
-                results = pool.map(_build_inherited_part, range(len(parts)),
-                                   chunksize=max(1, len(parts) // (8 * workers)))
+                results = pool.map(_build_inherited_place, range(len(places)),
+                                   chunksize=max(1, len(places) // (32 * workers)))
         finally:
-            _PARTS = None
+            _PLACES = None
             gc.unfreeze()
     else:
         # the network read so far is not garbage: frozen, the collector's passes while building
         # do not walk it again and again (as in the forked workers)
         gc.freeze()
         try:
-            results = [_build_part_safe(p, options) for p in parts]
+            results = [_build_part_safe(_place(net, ids) if len(places) > 1 else net, options)
+                       for ids in places]
         finally:
             gc.unfreeze()
     for found, exc in results:
@@ -908,10 +909,31 @@ _PART_GAP_M = 250.0
 def split_network(net: OsmNetwork, options: OsmOptions) -> list[OsmNetwork]:
     """The network cut into places read independently: ways connected through shared
     nodes, joined when their bounding boxes come within ``_PART_GAP_M`` (plus the snap
-    tolerance). A metro extract is read place by place, so the work grows with its size."""
+    tolerance). A metro extract is read place by place, so the work grows with its size.
+
+    Parameters
+    ----------
+    net
+        The network of one extract.
+    options
+        Its options (the snap tolerance widens the gap between places).
+
+    Returns
+    -------
+    list of OsmNetwork
+        One network per place (``[net]`` itself when it is one place), in the order of
+        their least way id.
+    """
+    places = place_way_ids(net, options)
+    return [_place(net, ids) for ids in places] if len(places) > 1 else [net]
+
+
+def place_way_ids(net: OsmNetwork, options: OsmOptions) -> list[list[int]]:
+    """The way ids of each place of :func:`split_network` (each sorted), in the order of their
+    least way id, without cutting the network (the places are cut where they are built)."""
     ids = sorted(net.ways)
     if len(ids) < 2:
-        return [net]
+        return [ids]
     parent = list(range(len(ids)))
 
     def find(k):
@@ -965,27 +987,27 @@ def split_network(net: OsmNetwork, options: OsmOptions) -> list[OsmNetwork]:
     parts: dict[int, list[int]] = defaultdict(list)
     for r, root in enumerate(roots):
         parts[find_part(r)].extend(groups[root])
-    if len(parts) == 1:
-        return [net]
-    out = []
-    for key in sorted(parts):
-        way_ids = sorted(ids[k] for k in parts[key])
-        sub = OsmNetwork(source=net.source, ways={w: net.ways[w] for w in way_ids})
-        nodes = {n for w in way_ids for n in net.ways[w].nodes}
-        sub.coords = {n: net.coords[n] for n in sorted(nodes) if n in net.coords}
-        sub.elevation = {n: net.elevation[n] for n in sub.coords if n in net.elevation}
-        sub.ordinary = {n: net.ordinary[n] for n in sub.coords if n in net.ordinary}
-        out.append(sub)
-    return out
+    return [sorted(ids[k] for k in parts[key]) for key in sorted(parts)]
 
 
-#: (places, options) while forked workers build them
-_PARTS: tuple[list[OsmNetwork], OsmOptions] | None = None
+def _place(net: OsmNetwork, way_ids: list[int]) -> OsmNetwork:
+    """The network of one place: its ways, and the coordinates, ele and ordinary roads of
+    their nodes (in node id order)."""
+    sub = OsmNetwork(source=net.source, ways={w: net.ways[w] for w in way_ids})
+    nodes = {n for w in way_ids for n in net.ways[w].nodes}
+    sub.coords = {n: net.coords[n] for n in sorted(nodes) if n in net.coords}
+    sub.elevation = {n: net.elevation[n] for n in sub.coords if n in net.elevation}
+    sub.ordinary = {n: net.ordinary[n] for n in sub.coords if n in net.ordinary}
+    return sub
 
 
-def _build_inherited_part(k: int) -> tuple[list[Topology], TopologyError | None]:
-    parts, options = _PARTS
-    return _build_part_safe(parts[k], options)
+#: (network, way ids of each place, options) while forked workers build the places
+_PLACES: tuple[OsmNetwork, list[list[int]], OsmOptions] | None = None
+
+
+def _build_inherited_place(k: int) -> tuple[list[Topology], TopologyError | None]:
+    net, places, options = _PLACES
+    return _build_part_safe(_place(net, places[k]) if len(places) > 1 else net, options)
 
 
 def _build_part_safe(net: OsmNetwork, options: OsmOptions) -> tuple[list[Topology], TopologyError | None]:

@@ -127,7 +127,7 @@ def gc_paused():
 
 
 def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
-                          bbox: tuple[float, float, float, float] | None = None) -> OsmNetwork:
+                          bbox: tuple[float, float, float, float] | None = None, workers: int = 1) -> OsmNetwork:
     """Read the ways whose ``highway`` is in ``highways`` and their nodes.
 
     Parameters
@@ -139,6 +139,9 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
     bbox
         ``(min_lon, min_lat, max_lon, max_lat)``: keep only network ways with a
         node inside (each kept whole), as extracts are cut.
+    workers
+        Processes that share the second pass (the ordinary roads' nodes are looked at in
+        Python: each process looks at every ``workers``-th way). The result does not depend on it.
 
     Raises
     ------
@@ -188,28 +191,7 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
             #    tracker would pick the ways holding a network node in C++, but its id set is
             #    dense: ~1.5 GB for node ids spread over today's OSM id range.)
             if ways:
-                second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
-                    .with_filter(osmium.filter.KeyFilter("ele").enable_for(osmium.osm.NODE)) \
-                    .with_filter(osmium.filter.KeyFilter("highway").enable_for(osmium.osm.WAY))
-                for o in second:
-                    if o.is_node():
-                        if "ele" in o.tags and o.id in needed:
-                            ele = _ele(o.tags["ele"])
-                            if ele is None:
-                                log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
-                            else:
-                                net.elevation[o.id] = ele
-                        continue
-                    hw = o.tags.get("highway")
-                    if hw is None or hw in highways:
-                        continue
-                    info = None
-                    for nd in o.nodes:
-                        ref = nd.ref
-                        if ref in needed and ref not in net.ordinary:
-                            if info is None:
-                                info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
-                            net.ordinary[ref] = info
+                net.elevation, net.ordinary = _exits_and_elevation(src, highways, needed, workers)
         except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
             # libosmium: unknown format, XML/PBF errors, cut-short files, unreadable coordinates
             raise _format_error(src, exc) from None
@@ -223,3 +205,87 @@ def read_motorway_network(path: str | os.PathLike, highways: frozenset[str],
 
     log.info("%s: %d network ways, %d nodes", Path(src).name, len(net.ways), len(net.coords))
     return net
+
+
+class _PassError(Exception):
+    """libosmium's error in a process of the second pass, handed back as its message."""
+
+
+#: (file, network highways, network node ids, processes) while forked processes read the
+#: second pass (inherited, not pickled to them)
+_SECOND: tuple[str, frozenset[str], set[int], int] | None = None
+
+
+def _second_pass_share(share: int) -> tuple[dict[int, float], list[tuple[int, int, int, dict[str, str]]]]:
+    """One share of the second pass: the ele of network nodes (share 0 only) and, for every
+    ``shares``-th way tagged ``highway`` off the network, the network nodes it holds, as
+    ``(way's rank in the file, node's rank in the way, node id, tags)``."""
+    import osmium  # noqa: PLC0415
+
+    src, highways, needed, shares = _SECOND
+    elevation: dict[int, float] = {}
+    hits: list[tuple[int, int, int, dict[str, str]]] = []
+    seen: set[int] = set()
+    second = osmium.FileProcessor(src, osmium.osm.NODE | osmium.osm.WAY) \
+        .with_filter(osmium.filter.KeyFilter("ele").enable_for(osmium.osm.NODE)) \
+        .with_filter(osmium.filter.KeyFilter("highway").enable_for(osmium.osm.WAY))
+    rank = -1
+    try:
+        for o in second:
+            if o.is_node():
+                if share == 0 and "ele" in o.tags and o.id in needed:
+                    ele = _ele(o.tags["ele"])
+                    if ele is None:
+                        log.info("%s: node %d: unreadable ele=%r", src, o.id, o.tags["ele"])
+                    else:
+                        elevation[o.id] = ele
+                continue
+            rank += 1
+            if rank % shares != share:
+                continue
+            hw = o.tags.get("highway")
+            if hw is None or hw in highways:
+                continue
+            info = None
+            for i, nd in enumerate(o.nodes):
+                ref = nd.ref
+                if ref in needed and ref not in seen:
+                    if info is None:
+                        info = {k: o.tags[k] for k in ("highway", "ref", "name") if k in o.tags}
+                    seen.add(ref)
+                    hits.append((rank, i, ref, info))
+    except (RuntimeError, ValueError, UnicodeDecodeError, osmium.InvalidLocationError) as exc:
+        raise _PassError(str(exc)) from None
+    return elevation, hits
+
+
+def _exits_and_elevation(src: str, highways: frozenset[str], needed: set[int],
+                         workers: int) -> tuple[dict[int, float], dict[int, dict[str, str]]]:
+    """The second pass (``workers`` forked processes, each on every ``workers``-th way): the
+    ele of network nodes, and network node id → tags of the first ordinary road (in file
+    order) holding it.
+
+    Raises
+    ------
+    RuntimeError
+        libosmium's error in any of the processes (its message).
+    """
+    global _SECOND  # noqa: PLW0603 (inherited by the forked processes, not pickled to them)
+    _SECOND = (src, highways, needed, max(1, workers))
+    try:
+        if workers > 1:
+            import multiprocessing  # noqa: PLC0415
+
+            with multiprocessing.get_context("fork").Pool(workers) as pool:
+                shares = pool.map(_second_pass_share, range(workers))
+        else:
+            shares = [_second_pass_share(0)]
+    except _PassError as exc:
+        raise RuntimeError(str(exc)) from None
+    finally:
+        _SECOND = None
+    elevation = shares[0][0]
+    ordinary: dict[int, dict[str, str]] = {}
+    for _, _, ref, info in sorted((h for _, hits in shares for h in hits), key=lambda h: h[:2]):
+        ordinary.setdefault(ref, info)  # the first way in the file holding the node
+    return elevation, ordinary
