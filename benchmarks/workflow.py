@@ -8,7 +8,8 @@ Usage::
 Steps (each printed with its wall time):
 
 1. ``git clone`` of this repository's HEAD (the working tree's uncommitted changes are not
-   in it) into a temporary folder; the clone uses this ``.venv`` and ``.venv-qc`` and
+   in it) into a temporary folder; the clone uses this ``.venv``, ``.venv-qc`` and
+   ``.venv-clients`` and
    compiles its numba kernels first (``python -m flyover.warmup``, as ``./dev setup`` does);
 2. the main job: ``snakemake -j2`` (everything ``rule all`` asks);
 3. a no-op rerun (``snakemake -j2`` again);
@@ -119,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
     subprocess.run(["git", "clone", "-q", str(REPO), str(clone)], check=True)
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone, capture_output=True,
                           text=True, check=True).stdout.strip()
-    for venv in (".venv", ".venv-qc"):
+    for venv in (".venv", ".venv-qc", ".venv-clients"):
         (clone / venv).symlink_to(REPO / venv)
     py, smk = str(REPO / ".venv" / "bin" / "python"), str(REPO / ".venv" / "bin" / "snakemake")
     logs = clone / "bench-logs"
