@@ -12,9 +12,10 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
   exported .xodr** (read back with :mod:`flyover.opendrive.reader`; the centre of the
   ramp's own lanes, followed through the lane links, along all its roads joined end to
   end, the junction connecting roads included;
-  radius by three-point circles spanning 10 m (the arc a radius must be held over,
-  :data:`flyover.geometry._kernels.HOLD_M`) from every 0.5 m,
-  :func:`flyover.osm.geom.min_radius`; see :func:`remeasure`;
+  radius: the tightest held over 10 m of that line (heading change over arc length, the
+  fit's definition, :data:`flyover.geometry._kernels.HOLD_M`), also by three-point
+  circles spanning 10 m from every 0.5 m (:func:`flyover.osm.geom.min_radius`, the OSM
+  importer's estimator); see :func:`remeasure`;
   slope as dz/ds of the elevation every metre) against the targets of
   geometry.parquet: within 5 % of the radius target (an ``inf`` target: no
   tighter than ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
@@ -115,8 +116,8 @@ def _build(job: tuple[str, int]) -> tuple:
         r["stretch"] = stretch[r["ramp"]]
     xodr = remeasure(ic.geometry)
     for r in rows:
-        r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"] = \
-            xodr.get(r["ramp"], (math.nan, math.nan, math.nan))
+        r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
+            xodr.get(r["ramp"], (math.nan,) * 4)
     return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
             bridges, footprint(ic), grade_jumps(ic.geometry), rounds)
 
@@ -235,17 +236,44 @@ def _lane_centre_t(road, s: np.ndarray, own: list[set[int]], fixed: float | None
     return out
 
 
-def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float]]:
+def held_radius_xy(xy: np.ndarray, hold_m: float = HOLD_M, step_m: float = 0.5) -> float:
+    """The tightest radius a polyline holds over ``hold_m`` of its own arc: its heading
+    change between each point (resampled every ``step_m``) and the first one ``hold_m``
+    further on, over that arc length, as :func:`flyover.geometry.bezier.held_radius`
+    measures a fit (there on the reference line, offset to the lane centre)."""
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    if cum[-1] < hold_m + 2 * step_m:
+        return math.inf
+    s = np.arange(0.0, cum[-1] + 1e-9, step_m)
+    p = np.column_stack([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
+    d = np.diff(p, axis=0)
+    head = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))  # of each step, at its middle
+    mid = 0.5 * (s[1:] + s[:-1])
+    k = np.searchsorted(mid, mid + hold_m, side="left")
+    ok = k < len(mid)
+    j = np.flatnonzero(ok)
+    turn = np.abs(head[k[ok]] - head[j])
+    with np.errstate(divide="ignore"):
+        r = (mid[k[ok]] - mid[j]) / turn
+    return float(r.min()) if len(r) else math.inf
+
+
+def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float, float]]:
     """Ramp id → (min radius of the centre line of its own lanes, max slope %, min radius
-    of the line width / 2 right of its reference line), read back from the exported .xodr
-    (``tapers=False``: not its junction connecting roads).
+    of the line width / 2 right of its reference line, min three-point radius of the
+    centre line of its own lanes), read back from the exported .xodr (``tapers=False``:
+    not its junction connecting roads).
 
     A ramp's roads are joined end to end (the writer numbers them along the ramp) and its
-    lane centre is sampled every 0.5 m; the radius is the smallest of the three-point
-    circles spanning 10 m (:data:`HOLD_M`, points 5 m apart) that start at any of those
-    samples, across road ends too (circles only from each road's start, on a 5 m grid,
-    missed a ramp's tightest 10 m where it lay across a junction's cut or off the grid:
-    up to 15 % too wide). The own lanes are followed through the lane links: on a piece
+    lane centre is sampled every 0.5 m, across road ends too. The radius is the tightest
+    held over 10 m (:data:`HOLD_M`) of that line, :func:`held_radius_xy`, the fit's
+    definition (:func:`flyover.geometry.bezier.held_radius`); the last figure is the
+    smallest three-point circle spanning 10 m (points 5 m apart) from every 0.5 m, the OSM
+    importer's estimator (:func:`flyover.osm.geom.min_radius`), which reads a turn of
+    heading concentrated within a few metres as up to twice as tight. (The former
+    re-measure took three-point circles only from each road's start, on a 5 m grid: it
+    missed a ramp's tightest 10 m where it lay across a junction's cut or off the grid, up
+    to 15 % too wide.) The own lanes are followed through the lane links: on a piece
     where a merging or diverging ramp's auxiliary lane runs beside them (opened on the
     left by ``laneOffset``, which also shifts the reference line's lane layout), they do
     not move, and neither does their centre."""
@@ -285,9 +313,11 @@ def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, fl
                 line[-1].append(xy)
             if len(s) > 1:
                 slope = max(slope, float(np.abs(np.diff(z) / np.diff(s)).max()) * 100.0)
-        rads = [min([min_radius(np.concatenate(run), step_m=0.5, chord_steps=int(HOLD_M))
-                     for run in line if run] + [math.inf]) for line in lines]
-        out[name] = (rads[0], slope, rads[1])
+        runs = [[np.concatenate(run) for run in line if run] for line in lines]
+        held = [min([held_radius_xy(xy) for xy in rs] + [math.inf]) for rs in runs]
+        circles = min([min_radius(xy, step_m=0.5, chord_steps=int(HOLD_M)) for xy in runs[0]]
+                      + [math.inf])
+        out[name] = (held[0], slope, held[1], circles)
     return out
 
 
@@ -446,19 +476,25 @@ def main() -> None:
     for r in rows:
         ref.setdefault(names[r["class_id"]], []).append(
             agrees(r, settings.fit.inf_reference_m, "xodr_ref_radius_m")[0])
+    circ: dict[str, list] = {}
+    for r in rows:
+        circ.setdefault(names[r["class_id"]], []).append(
+            agrees(r, settings.fit.inf_reference_m, "xodr_3pt_radius_m")[0])
     every = [a for v in by_name.values() for a in v]
     for name, ag in sorted(by_name.items()) + [("total", every)]:
         n = len(ag)
         rf = ref.get(name, [x for v in ref.values() for x in v])
+        rc = circ.get(name, [x for v in circ.values() for x in v])
         print(f"  {name:<17} radius {100 * sum(a for a, _ in ag) / n:5.1f} %  slope "
               f"{100 * sum(b for _, b in ag) / n:5.1f} %  both {100 * sum(a and b for a, b in ag) / n:5.1f} %"
               f"  (n={n});  radius of the line width / 2 right of the reference line "
-              f"{100 * sum(rf) / n:5.1f} %")
+              f"{100 * sum(rf) / n:5.1f} %, by three-point circles {100 * sum(rc) / n:5.1f} %")
     bad = [r for r in rows if not all(agrees(r, settings.fit.inf_reference_m))]
     for r in bad[:args.show_misses]:
         print(f"    miss {names[r['class_id']]} {r['sample']} {r['ramp']}: radius "
               f"{r['target_radius_m']:g} -> {r['xodr_radius_m']:.1f} "
-              f"(reference line - width / 2 {r['xodr_ref_radius_m']:.1f}, fit "
+              f"(reference line - width / 2 {r['xodr_ref_radius_m']:.1f}, three-point "
+              f"{r['xodr_3pt_radius_m']:.1f}, fit "
               f"{r['min_radius_m']:.1f}),"
               f" slope {r['target_slope_pct']:g} -> {r['xodr_slope_pct']:.2f} "
               f"(fit {r['max_slope_pct']:.2f}) {r['infeasible'][:60]}")
