@@ -127,7 +127,8 @@ def class_tables(stage):
 #     is the same bytes in every run)
 # 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
 #     (length_margin), inf resampled only where sampling allows it
-GEOMETRY_VERSION = 13
+# 14: a ramp attached to a ramp attaches where its parent is level (no grade jump), if it can
+GEOMETRY_VERSION = 14
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
