@@ -9,11 +9,13 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
   tolerance at the end, recorded infeasible, with a same-level conflict;
 * per design: ramp length median / p95 / max, footprint (bounding box of the
   ramps' lane centres), and the ramps' radius and slope **re-measured from the
-  exported .xodr** (read back with :mod:`flyover.opendrive.reader`; lane centre
-  width / 2 right of the ramp's reference line, as the fit measures it, on all its
-  roads, the junction tapers included;
-  radius by three-point circles spanning 10 m (the arc a radius must be held over,
-  :data:`flyover.geometry._kernels.HOLD_M`), :func:`flyover.osm.geom.min_radius`;
+  exported .xodr** (read back with :mod:`flyover.opendrive.reader`; the centre of the
+  ramp's own lanes, followed through the lane links, along all its roads joined end to
+  end, the junction connecting roads included;
+  radius: the tightest held over 10 m of that line (heading change over arc length, the
+  fit's definition, :data:`flyover.geometry._kernels.HOLD_M`), also by three-point
+  circles spanning 10 m from every 0.5 m (:func:`flyover.osm.geom.min_radius`, the OSM
+  importer's estimator); see :func:`remeasure`;
   slope as dz/ds of the elevation every metre) against the targets of
   geometry.parquet: within 5 % of the radius target (an ``inf`` target: no
   tighter than ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
@@ -114,8 +116,8 @@ def _build(job: tuple[str, int]) -> tuple:
         r["stretch"] = stretch[r["ramp"]]
     xodr = remeasure(ic.geometry)
     for r in rows:
-        r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"] = \
-            xodr.get(r["ramp"], (math.nan, math.nan, math.nan))
+        r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
+            xodr.get(r["ramp"], (math.nan,) * 4)
     return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
             bridges, footprint(ic), grade_jumps(ic.geometry), rounds)
 
@@ -189,30 +191,133 @@ def _lane_offset(road, s: np.ndarray) -> np.ndarray:
     return out
 
 
-def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float]]:
-    """Ramp id → (min radius of its lane centre line, max slope %, min radius of the line
-    width / 2 right of its reference line), read back from the exported .xodr (all the
-    ramp's roads; ``tapers=False``: not its junction connecting roads). The first radius
-    follows the exporter's laneOffset (where a merging or diverging lane shifts the
-    ramp's own lane sideways), the last is the fitted curve's definition."""
+def _own_lanes(road, first: set[int] | None, last: set[int] | None, n: int) -> list[set[int]]:
+    """The ramp's own driving lanes in each lane section of ``road`` (not the auxiliary
+    lanes of a merging or diverging ramp beside them): ``first`` (``last``), the lane ids
+    of its first (last) section that the ramp's adjacent connecting road links to, are
+    followed section by section through the lane links; without either (a piece between
+    two straight-on links), its ``n`` innermost driving lanes."""
+    secs = road.sections
+    driving = [{k for k, ln in sec.lanes.items() if ln.type == "driving"} for sec in secs]
+    out: list[set[int]] = [set() for _ in secs]
+    if first is not None:
+        out[0] = first & driving[0]
+        for i in range(1, len(secs)):
+            out[i] = {n for k in out[i - 1] for n in secs[i - 1].lanes[k].successors} & driving[i]
+    elif last is not None:
+        out[-1] = last & driving[-1]
+        for i in range(len(secs) - 2, -1, -1):
+            out[i] = {p for k in out[i + 1] for p in secs[i + 1].lanes[k].predecessors} \
+                & driving[i]
+    else:
+        out = [set(sorted(d, reverse=True)[:n]) for d in driving]
+    return [o if o else d for o, d in zip(out, driving)]
+
+
+def _lane_centre_t(road, s: np.ndarray, own: list[set[int]], fixed: float | None) -> np.ndarray:
+    """Lateral offset of the centre of the ramp's own lanes (``own`` per section) at ``s``;
+    ``fixed``: that offset without the lane layout (width / 2 right of the reference line)."""
+    if fixed is not None:
+        return np.full_like(s, fixed)
+    t = _lane_offset(road, s)
+    starts = np.array([sec.s for sec in road.sections])
+    idx = np.clip(np.searchsorted(starts, s + 1e-9, side="right") - 1, 0, len(starts) - 1)
+    out = np.empty_like(s)
+    for i in np.unique(idx):
+        m = idx == i
+        sec, ds = road.sections[i], s[m] - road.sections[i].s
+        inner, edges = t[m], {}
+        for k in range(1, max(abs(j) for j in own[i]) + 1):  # right lanes: ids -1, -2, ...
+            w = sec.lanes[-k].width(ds) if -k in sec.lanes else 0.0
+            edges[-k] = (inner, inner - w)
+            inner = inner - w
+        lo, hi = max(own[i]), min(own[i])  # innermost and outermost own lane
+        out[m] = 0.5 * (edges[lo][0] + edges[hi][1])
+    return out
+
+
+def held_radius_xy(xy: np.ndarray, hold_m: float = HOLD_M, step_m: float = 0.5) -> float:
+    """The tightest radius a polyline holds over ``hold_m`` of its own arc: its heading
+    change between each point (resampled every ``step_m``) and the first one ``hold_m``
+    further on, over that arc length, as :func:`flyover.geometry.bezier.held_radius`
+    measures a fit (there on the reference line, offset to the lane centre)."""
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    if cum[-1] < hold_m + 2 * step_m:
+        return math.inf
+    s = np.arange(0.0, cum[-1] + 1e-9, step_m)
+    p = np.column_stack([np.interp(s, cum, xy[:, 0]), np.interp(s, cum, xy[:, 1])])
+    d = np.diff(p, axis=0)
+    head = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))  # of each step, at its middle
+    mid = 0.5 * (s[1:] + s[:-1])
+    k = np.searchsorted(mid, mid + hold_m, side="left")
+    ok = k < len(mid)
+    j = np.flatnonzero(ok)
+    turn = np.abs(head[k[ok]] - head[j])
+    with np.errstate(divide="ignore"):
+        r = (mid[k[ok]] - mid[j]) / turn
+    return float(r.min()) if len(r) else math.inf
+
+
+def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float, float]]:
+    """Ramp id → (min radius of the centre line of its own lanes, max slope %, min radius
+    of the line width / 2 right of its reference line, min three-point radius of the
+    centre line of its own lanes), read back from the exported .xodr (``tapers=False``:
+    not its junction connecting roads).
+
+    A ramp's roads are joined end to end (the writer numbers them along the ramp) and its
+    lane centre is sampled every 0.5 m, across road ends too. The radius is the tightest
+    held over 10 m (:data:`HOLD_M`) of that line, :func:`held_radius_xy`, the fit's
+    definition (:func:`flyover.geometry.bezier.held_radius`); the last figure is the
+    smallest three-point circle spanning 10 m (points 5 m apart) from every 0.5 m, the OSM
+    importer's estimator (:func:`flyover.osm.geom.min_radius`), which reads a turn of
+    heading concentrated within a few metres as up to twice as tight. (The former
+    re-measure took three-point circles only from each road's start, on a 5 m grid: it
+    missed a ramp's tightest 10 m where it lay across a junction's cut or off the grid, up
+    to 15 % too wide.) The own lanes are followed through the lane links: on a piece
+    where a merging or diverging ramp's auxiliary lane runs beside them (opened on the
+    left by ``laneOffset``, which also shifts the reference line's lane layout), they do
+    not move, and neither does their centre."""
     net = read_xodr(io.BytesIO(xodr_bytes(geometry)))
-    out: dict[str, tuple[float, float]] = {}
     widths = {r.id: r.lanes * geometry.ramp_lane_width_m for r in geometry.ramps}
-    for road in net.roads.values():
-        if road.name not in widths or (road.junction != "-1" and not tapers) or road.length < 1.0:
-            continue
-        s = np.linspace(0.0, road.length, max(3, int(road.length / 0.5) + 1))
-        x, y, z, h = road.reference(s)
-        # the fit's lane centre: width / 2 right of the reference line (plus any lane offset)
-        rads = []
-        for t in (_lane_offset(road, s) - widths[road.name] / 2,
-                  np.full_like(s, -widths[road.name] / 2)):
-            xy = np.stack([x - np.sin(h) * t, y + np.cos(h) * t], -1)
-            rads.append(min_radius(xy, step_m=HOLD_M / 2, chord_steps=1))
-        grade = np.abs(np.diff(z) / np.diff(s)) * 100.0
-        slope = float(grade.max()) if len(grade) else 0.0
-        r0, g0, q0 = out.get(road.name, (math.inf, 0.0, math.inf))
-        out[road.name] = (min(r0, rads[0]), max(g0, slope), min(q0, rads[1]))
+    lanes = {r.id: r.lanes for r in geometry.ramps}
+    by_ramp: dict[str, list] = {}
+    for road in sorted(net.roads.values(), key=lambda r: int(r.id)):
+        if road.name in widths and (road.junction == "-1" or tapers):
+            by_ramp.setdefault(road.name, []).append(road)
+    out: dict[str, tuple[float, float, float]] = {}
+    for name, roads in by_ramp.items():
+        lines: list[list[list[np.ndarray]]] = [[[]], [[]]]  # contiguous runs of points
+        slope = 0.0
+        for i, road in enumerate(roads):
+            if road.length < 1e-3:
+                continue
+            s = np.linspace(0.0, road.length, max(3, int(road.length / 0.5) + 1))
+            x, y, z, h = road.reference(s)
+            prev = roads[i - 1] if i else None
+            nxt = roads[i + 1] if i + 1 < len(roads) else None
+            first = last = None
+            if prev is not None and prev.junction != "-1" and prev.successor == ("road", road.id, "start"):
+                first = {n for k, ln in prev.sections[-1].lanes.items() if ln.type == "driving"
+                         for n in ln.successors}
+            elif nxt is not None and nxt.junction != "-1" and nxt.predecessor == ("road", road.id, "end"):
+                last = {p for k, ln in nxt.sections[0].lanes.items() if ln.type == "driving"
+                        for p in ln.predecessors}
+            own = _own_lanes(road, first, last, lanes[name])
+            for line, fixed in zip(lines, (None, -widths[name] / 2)):
+                t = _lane_centre_t(road, s, own, fixed)
+                xy = np.stack([x - np.sin(h) * t, y + np.cos(h) * t], -1)
+                if line[-1] and np.hypot(*(line[-1][-1][-1] - xy[0])) < 1e-3:
+                    xy = xy[1:]  # the same point: the road goes on from the previous one
+                elif line[-1]:
+                    line.append([])  # a gap (a connecting road left out): another run
+                line[-1].append(xy)
+            if len(s) > 1:
+                slope = max(slope, float(np.abs(np.diff(z) / np.diff(s)).max()) * 100.0)
+        runs = [[np.concatenate(run) for run in line if run] for line in lines]
+        held = [min([held_radius_xy(xy) for xy in rs] + [math.inf]) for rs in runs]
+        circles = min([min_radius(xy, step_m=0.5, chord_steps=int(HOLD_M)) for xy in runs[0]]
+                      + [math.inf])
+        out[name] = (held[0], slope, held[1], circles)
     return out
 
 
@@ -371,18 +476,26 @@ def main() -> None:
     for r in rows:
         ref.setdefault(names[r["class_id"]], []).append(
             agrees(r, settings.fit.inf_reference_m, "xodr_ref_radius_m")[0])
+    circ: dict[str, list] = {}
+    for r in rows:
+        circ.setdefault(names[r["class_id"]], []).append(
+            agrees(r, settings.fit.inf_reference_m, "xodr_3pt_radius_m")[0])
     every = [a for v in by_name.values() for a in v]
     for name, ag in sorted(by_name.items()) + [("total", every)]:
         n = len(ag)
         rf = ref.get(name, [x for v in ref.values() for x in v])
+        rc = circ.get(name, [x for v in circ.values() for x in v])
         print(f"  {name:<17} radius {100 * sum(a for a, _ in ag) / n:5.1f} %  slope "
               f"{100 * sum(b for _, b in ag) / n:5.1f} %  both {100 * sum(a and b for a, b in ag) / n:5.1f} %"
-              f"  (n={n});  radius without the exporter's laneOffset {100 * sum(rf) / n:5.1f} %")
-    bad = [r for r in rows if not all(agrees(r, settings.fit.inf_reference_m, "xodr_ref_radius_m"))]
+              f"  (n={n});  radius of the line width / 2 right of the reference line "
+              f"{100 * sum(rf) / n:5.1f} %, by three-point circles {100 * sum(rc) / n:5.1f} %")
+    bad = [r for r in rows if not all(agrees(r, settings.fit.inf_reference_m))]
     for r in bad[:args.show_misses]:
         print(f"    miss {names[r['class_id']]} {r['sample']} {r['ramp']}: radius "
-              f"{r['target_radius_m']:g} -> {r['xodr_ref_radius_m']:.1f} "
-              f"(laneOffset {r['xodr_radius_m']:.1f}, fit {r['min_radius_m']:.1f}),"
+              f"{r['target_radius_m']:g} -> {r['xodr_radius_m']:.1f} "
+              f"(reference line - width / 2 {r['xodr_ref_radius_m']:.1f}, three-point "
+              f"{r['xodr_3pt_radius_m']:.1f}, fit "
+              f"{r['min_radius_m']:.1f}),"
               f" slope {r['target_slope_pct']:g} -> {r['xodr_slope_pct']:.2f} "
               f"(fit {r['max_slope_pct']:.2f}) {r['infeasible'][:60]}")
     print("outer connectors that go round their loop (not over or under it, "

@@ -565,6 +565,40 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
 
 
+def _grade_jumps(g: InterchangeGeometry) -> list[float]:
+    """|child's grade − parent's grade| (pp) at every end of a ramp attached to a ramp."""
+    ramps = {r.id: r for r in g.ramps}
+    out = []
+    for r in g.ramps:
+        length = sum(p.length_m for p in r.plan)
+        for att, s_child in ((r.start, 0.0), (r.end, length)):
+            if att.parent in ramps:
+                _, gc = evaluate_polys(r.elevation, np.array([s_child]))
+                _, gp = evaluate_polys(ramps[att.parent].elevation, np.array([att.s_m]))
+                out.append(100.0 * abs(float(gc[0]) - float(gp[0])))
+    return out
+
+
+def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatch):
+    """J1's r2 leaves r1 and joins r3, which climb or descend between their roads' levels;
+    r2's profile starts and ends level, so attached on r3's descent it met r3 with a 4 pp
+    jump in grade. It now attaches where r1 and r3 are level, first try."""
+    from flyover.geometry import rails  # noqa: PLC0415
+
+    t = catalog_topologies()["j1"]
+    feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
+    st = LayoutSettings(rebuilds=0)
+    ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=11, settings=st)
+    assert all(o.first_try_ok for o in ic.outcomes)
+    jumps = _grade_jumps(ic.geometry)
+    assert len(jumps) == 2 and max(jumps) <= 0.5
+    # without the rule, the same build joins r3 on its grade
+    monkeypatch.setattr(rails.AttachmentWindows, "level_part",
+                        lambda self, parent, lo, hi: (lo, hi))
+    anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=11, settings=st)
+    assert max(_grade_jumps(anywhere.geometry)) > 3.0
+
+
 def test_collector_distributor_roads_run_beside_their_carriageway():
     """A cloverleaf's C-D roads leave their carriageway on a reverse curve at their target
     radius, run straight beside it cd_offset_m from its edge, and rejoin it: no search,

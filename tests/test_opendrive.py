@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 
 import numpy as np
@@ -255,3 +256,27 @@ def test_reader_follows_spirals_and_arcs_of_other_tools(tmp_path):
     assert check_continuity(good)[0]
     bad = rx(io.BytesIO(_two_roads(x + 0.02, y, h)))
     assert not check_continuity(bad)[0]
+
+
+def test_straight_on_branch_of_a_fork_changes_lane_width_over_a_taper_not_the_junction():
+    """A carriageway of 3.75 m lanes ends by splitting into a straight-on ramp of 4 m lanes
+    and a ramp beside it ("y"): the straight-on ramp's lane keeps the carriageway's width
+    on its connecting road and widens over the taper on its body, so its centre line moves
+    sideways gently (on the 15 m connecting road it moved 0.125 m: a bend of ~200 m radius
+    that the ramp's own curve does not have)."""
+    g = sample_geometry("y")
+    net = read_xodr(io.BytesIO(xodr_bytes(g)))
+    roads = sorted((r for r in net.roads.values() if r.name == "r1"), key=lambda r: int(r.id))
+    conn, body = roads[0], roads[1]
+    assert conn.junction != "-1" and body.junction == "-1"
+    for s in (0.0, conn.length):
+        inner, outer = conn.lane_t(-1, s, at_end=s > 0)
+        assert abs(inner - outer) == pytest.approx(g.lane_width_m)
+    drift = []
+    for road in (conn, body):
+        s = np.linspace(0.0, min(road.length, 120.0), 241)
+        t = np.array([sum(road.lane_t(-1, x)) / 2 for x in s])
+        drift.append(np.abs(np.diff(t) / np.diff(s)).max())
+    assert max(drift) < 0.004
+    end = body.lane_t(-1, 100.0)
+    assert abs(end[0] - end[1]) == pytest.approx(g.ramp_lane_width_m)

@@ -16,7 +16,10 @@ and the ramps already fitted:
    that climbs may first run along its parent's heading, as long as the climb
    from that end takes: up beside its road before it turns over the other
    carriageway), then also with one more Bézier piece, then with one more
-   piece but no leads, then with other seeds (``restarts`` fits in all);
+   piece but no leads, then with other seeds (``restarts`` fits in all); a
+   ramp attached to a ramp is first held to where its parent is level (no jump in
+   grade, :meth:`flyover.geometry.rails.AttachmentWindows.level_part`) and, if
+   it misses its targets there, fitted so again anywhere in its windows;
 3. one that still meets fitted ramps at its level makes way (rip-up and
    reroute): each ramp it meets, if nothing is attached to it yet and it is
    not its parent, is fitted again on its own targets with the new ramp's
@@ -218,6 +221,12 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2
+            if not fit.ok and not _systematic(fit):  # held to where its parent is level:
+                loose = b.spec(ramp, feat, level=False)  # then anywhere in its windows
+                if _windows(loose) != _windows(spec):
+                    fit2, e2, s2 = _fit_with_levels(b, loose, rseed + 3)
+                    evals, secs = evals + e2, secs + s2
+                    fit = min([fit, fit2], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
         if fit.conflicts:  # make way: refit the ramps it meets, then it again
             fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
             evals, secs = evals + e2, secs + s2
@@ -300,6 +309,11 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
         evals, secs = evals + e, secs + t
         fit = min([fit, again], key=lambda f: (f.conflicts, not f.ok))
     return fit, evals, secs
+
+
+def _windows(spec: RampSpec) -> tuple:
+    """The attachment windows ``lo, hi`` of a spec's attached ends."""
+    return tuple((r.lo, r.hi) for r in (spec.start, spec.end) if r is not None)
 
 
 def _systematic(fit: RampFit) -> bool:

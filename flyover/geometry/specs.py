@@ -45,7 +45,9 @@ class RampSpecs:
             moves, levels, fitted, windows, st
         self.topo, self.roads, self.g = moves.topo, moves.roads, moves.g
 
-    def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
+    def spec(self, ramp: str, feat: RampFeatures, level: bool = True) -> RampSpec:
+        """The spec of ``ramp`` for targets ``feat``; ``level``: an end on a ramp attaches
+        where that ramp is level, if it can (:meth:`flyover.geometry.rails.AttachmentWindows.level_part`)."""
         start, end = ends(self.topo, ramp)
         width = self.fitted.width[ramp]
         st, plan = self.st, self.levels.crests
@@ -111,8 +113,8 @@ class RampSpecs:
         if st.length_margin is not None and start is not None and end is not None \
                 and not self.moves.same_road(ramp):
             bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end)
-        a = w.rail(ramp, feat, start, True, loop, width, extra, bound) if start else None
-        b = w.rail(ramp, feat, end, False, loop, width, extra_b, bound) if end else None
+        a = w.rail(ramp, feat, start, True, loop, width, extra, bound, level) if start else None
+        b = w.rail(ramp, feat, end, False, loop, width, extra_b, bound, level) if end else None
         crest = plan.get(ramp)
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat),

@@ -58,8 +58,8 @@ class LayoutState:
     def width(self) -> Mapping[str, float]:
         return self.fitted.width
 
-    def spec(self, ramp: str, feat: RampFeatures) -> RampSpec:
-        return self.specs.spec(ramp, feat)
+    def spec(self, ramp: str, feat: RampFeatures, level: bool = True) -> RampSpec:
+        return self.specs.spec(ramp, feat, level)
 
     def obstacles(self, keep_out: frozenset[str] = frozenset()) -> Obstacles:
         return self.fitted.obstacles(keep_out)

@@ -182,7 +182,8 @@ class _Piece:
     s1: float
     junction: int | None = None  # junction id when a connecting road
     road_id: int = 0
-    start_region: tuple | None = None  # ("aux", side, k, w) | ("trans", n_from, w_from)
+    #: ("aux", side, k, w) | ("trans", n_from, w_from) | ("drop", n_from, w_from)
+    start_region: tuple | None = None
     end_region: tuple | None = None
     pred: tuple | None = None  # ("road", id, contact) | ("junction", id)
     succ: tuple | None = None
@@ -425,10 +426,23 @@ def _link_fork(j: _Junction, pieces: dict[str, list[_Piece]], els: dict[str, _El
         rlist = pieces[e.ramp]
         ri = rlist.index(rp)
         if e.side == "M":
+            # the carriageway's lanes beyond the ramp's end (begin) on the connecting road;
+            # the ramp's own lanes change width over a taper on its body, where a 15 m
+            # change bent their centre line (a 2-lane ramp: 0.25 m sideways, a 210 m ramp
+            # read back as 184 m)
+            ramp = els[e.ramp]
+            body = rlist[ri + 1] if j.forking else rlist[ri - 1]
+            taper = (abs(par.width - ramp.width) > 1e-9 and body.junction is None
+                     and (body.start_region if j.forking else body.end_region) is None)
+            region = ("drop" if taper else "trans", par.lanes, par.width)
             if j.forking:
-                rp.start_region = ("trans", par.lanes, par.width)
+                rp.start_region = region
+                if taper:
+                    body.start_region = ("trans", ramp.lanes, par.width)
             else:
-                rp.end_region = ("trans", par.lanes, par.width)
+                rp.end_region = region
+                if taper:
+                    body.end_region = ("trans", ramp.lanes, par.width)
         if e.out:
             body = rlist[ri + 1]
             end_piece.succ, body.pred = ("junction", j.id), ("junction", j.id)
@@ -557,11 +571,12 @@ def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: floa
             return _const(0.0), base + aux + [(("sh",), _const(sh))]
         off = Cubic(0.0, cub.a * k, cub.b * k, cub.c * k, cub.d * k)
         return off, aux + base + [(("sh",), _const(sh))]
-    # width transition toward/from a carriageway of n lanes of width w (Out-M / In-M)
-    _, n, w = region
+    # width transition toward/from a carriageway of n lanes of width w (Out-M / In-M);
+    # "drop": only its lanes beyond the ramp's close (open), the ramp's keep width w
+    kind, n, w = region
     lanes = []
     for i in range(1, max(n, el.lanes) + 1):
-        mine = el.width if i <= el.lanes else 0.0
+        mine = (w if kind == "drop" else el.width) if i <= el.lanes else 0.0
         theirs = w if i <= n else 0.0
         cub = _change(mine, theirs, T) if opening else _change(theirs, mine, T)
         lanes.append((("b", i) if i <= el.lanes else ("x", i), cub))

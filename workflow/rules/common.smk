@@ -14,7 +14,7 @@ validate_config(config, "config/config.yaml")
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
 TOPOLOGY_VERSION = 5  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader; 5: OSM connectors between roads, ref-less carriageways paired by name, 3+ motorway link groups one interchange, direct ramps with geometry, self-check legs by carriageway pairs
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
-EXPORT_VERSION = 6  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout; 6: connecting roads taper over 2/3 of the section (CommonRoad)
+EXPORT_VERSION = 7  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout; 6: connecting roads taper over 2/3 of the section (CommonRoad); 7: a straight-on branch of a fork or join changes its lane width over a taper on its body, not the connecting road
 VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
 CLIENTS_SAMPLE_VERSION = 2  # 1: CommonRoad's map verifier on one seeded interchange; 2: among the smallest tenth
 
@@ -128,7 +128,8 @@ def class_tables(stage):
 #     is the same bytes in every run)
 # 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
 #     (length_margin), inf resampled only where sampling allows it
-GEOMETRY_VERSION = 13
+# 14: a ramp attached to a ramp attaches where its parent is level (no grade jump), if it can
+GEOMETRY_VERSION = 14
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
