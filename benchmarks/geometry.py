@@ -25,9 +25,11 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
   scipy's plain (one call per candidate) DE on the same objective and with
   the same stopping rule, i.e. at equal accuracy.
 
-Run: ``OMP_NUM_THREADS=1 .venv/bin/python benchmarks/geometry.py --samples 3``;
+Run (from the repository root; ``PYTHONPATH=.`` so that a git worktree's own ``flyover``
+is imported, not the one the venv's editable install points at):
+``OMP_NUM_THREADS=1 PYTHONPATH=. .venv/bin/python benchmarks/geometry.py --samples 3``;
 the whole catalog city as the workflow samples it, one process per core:
-``.venv/bin/python benchmarks/geometry.py --from-results --samples 0 --jobs 2``
+``PYTHONPATH=. .venv/bin/python benchmarks/geometry.py --from-results --samples 0 --jobs 2``
 (times are each interchange's CPU seconds in its own single-threaded process).
 """
 
@@ -68,14 +70,20 @@ from flyover.topology.catalog import catalog_topologies  # noqa: E402
 def drawn_feature_sets(topology, profile, n, seed):
     """``n`` feature sets drawn from the domains; features geometry fixes up front
     (slope 0 on level ramps, :func:`flyover.geometry.feasibility.fixed_features`) are
-    set, not drawn (the same draws as without them, so other designs are unchanged)."""
-    from flyover.geometry.feasibility import fixed_features, turning_ramps
+    set, not drawn (the same draws as without them, so other designs are unchanged).
+    As sampling forbids them (its ``extra=``, :func:`flyover.geometry.feasibility.
+    forbidden_features`): no ``inf`` on a turning ramp, and an outer connector and its
+    loop whose radii :meth:`~flyover.geometry.feasibility.RoundLoop.allows` does not are
+    drawn again, both, from a generator of their own (the other draws stay the same)."""
+    from flyover.geometry.feasibility import fixed_features, round_loops, turning_ramps
     from flyover.sampling.model import Feature
 
     fixed = fixed_features(topology)
     turning = turning_ramps(topology)  # inf is forbidden on them (sampling's extra=)
+    pairs = round_loops(topology)
     finite = [v for v in profile["ramp"]["radius_m"] if math.isfinite(float(v))]
     rng = np.random.default_rng(seed)
+    again = np.random.default_rng([seed, 1])
     out = {}
     for k in range(n):
         lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
@@ -84,6 +92,11 @@ def drawn_feature_sets(topology, profile, n, seed):
                                  float(fixed.get((r, Feature.SLOPE_PCT),
                                                  rng.choice(profile["ramp"]["slope_pct"]))))
                  for r in topology.ramps}
+        for p in pairs:
+            while not p.allows(ramps[p.connector].radius_m, ramps[p.loop].radius_m):
+                for r in (p.connector, p.loop):
+                    ramps[r] = replace(ramps[r], radius_m=float(again.choice(
+                        finite if r in turning else profile["ramp"]["radius_m"])))
         out[k] = (lanes, ramps)
     return out
 
@@ -136,7 +149,9 @@ def _build(job: tuple[str, int]) -> tuple:
     crossing = ramp_crossings(ic.geometry)
     bridges = len(crossing)
     crossed = {frozenset((c.ramp, c.other)) for c in crossing}
-    rounds = [frozenset(p) not in crossed for p in round_pairs(topo, settings)]
+    target = {o.ramp: o.fit.spec.target_radius_m for o in ic.outcomes}
+    rounds = [(frozenset(p) not in crossed, p[0], p[1], target[p[0]], target[p[1]])
+              for p in round_pairs(topo, settings)]
     rows = geometry_rows(ic)
     stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
     for r in rows:
@@ -175,19 +190,10 @@ def print_real_comparison(rows, names, real_by_ramp) -> None:
 def round_pairs(topo, settings) -> list[tuple[str, str]]:
     """(outer connector, loop) pairs: a cloverleaf's or parclo's outer connector and the
     loop joining the same two roads the other way round, on the road they share
-    (:meth:`flyover.geometry.chains.Movements.goes_round_loop`)."""
-    from flyover.geometry.chains import Movements, ends  # noqa: PLC0415
-    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    (:func:`flyover.geometry.feasibility.round_loops`)."""
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
 
-    moves = Movements(topo, layout_roads(topo, {}, settings))
-    out = []
-    for ramp in topo.ramps:
-        for other in topo.ramps:
-            shared = {e[0] for e in ends(topo, ramp) if e} & {e[0] for e in ends(topo, other) if e}
-            if any(road in moves.roads and moves.goes_round_loop(ramp, other, road)
-                   for road in shared):
-                out.append((ramp, other))
-    return out
+    return [(p.connector, p.loop) for p in round_loops(topo, settings)]
 
 
 def grade_jumps(geometry) -> list[float]:
@@ -416,6 +422,8 @@ def main() -> None:
                          "ramp by ramp with the real ones")
     ap.add_argument("--show-misses", type=int, default=0,
                     help="print this many ramps whose re-measured radius or slope misses")
+    ap.add_argument("--show-rounds", type=int, default=0,
+                    help="print this many outer connectors that go over or under their loop")
     ap.add_argument("--jobs", type=int, default=1,
                     help="worker processes (one per core; each interchange is timed in its "
                          "worker)")
@@ -457,8 +465,10 @@ def main() -> None:
     boxes: dict[str, list[float]] = {}
     jumps: dict[str, list[float]] = {}
     rounded: dict[str, list[bool]] = {}
+    round_misses: list[tuple] = []
     for name, sample, secs, ic_rows, ic_fits, dense, again, bridges, box, jump, rnd in done:
-        rounded.setdefault(name, []).extend(rnd)
+        rounded.setdefault(name, []).extend(r[0] for r in rnd)
+        round_misses += [(name, sample, *r[1:]) for r in rnd if not r[0]]
         jumps.setdefault(name, []).extend(jump)
         boxes.setdefault(name, []).append(box[0] * box[1] / 1e6)
         crossings.setdefault(name, []).append(bridges)
@@ -563,6 +573,9 @@ def main() -> None:
     for name, rs in sorted(rounded.items()):
         if rs:
             print(f"  {name:<17} {100 * sum(rs) / len(rs):5.1f} %  (n={len(rs)})")
+    for name, sample, ramp, loop, r_ramp, r_loop in round_misses[:args.show_rounds]:
+        print(f"    over/under {name} {sample} {ramp} (radius target {r_ramp:g}) and its loop "
+              f"{loop} ({r_loop:g})")
     print("grade jump where a ramp leaves / joins a ramp (pp; > 0.5 pp counted):")
     for name, js in sorted(jumps.items()):
         if js:

@@ -17,10 +17,11 @@ import pytest
 from flyover.cli import main
 from flyover.errors import ConfigError
 from flyover.geometry.feasibility import (
-    fixed_features, forbidden_features, level_ramps, turning_ramps,
+    fixed_features, forbidden_features, level_ramps, round_loops, turning_ramps,
 )
 from flyover.geometry.layout import LayoutSettings, RampFeatures
 from flyover.geometry.tables import build_sample, domain_resampler
+from flyover.sampling.constraints import Constraints
 from flyover.sampling.model import ElementCondition, Feature, ForbidRule, default_profile, feature_model
 from flyover.sampling.sample import FEATURES_SCHEMA, sample_topology
 from flyover.topology.catalog import catalog_topologies
@@ -217,3 +218,86 @@ def test_resampling_keeps_a_turning_ramp_finite():
     assert all(draw("t", k).radius_m != inf for k in range(1, 40))
     assert all(draw.clearing("t", k).radius_m != inf for k in range(1, 40))
     assert inf in {draw("s", k).radius_m for k in range(1, 40)}
+
+
+# -- outer connectors round their loops: wider than the loop ---------------------------------
+
+
+def _pair_allowed(model, connector: str, loop: str) -> dict[tuple[float, float], bool]:
+    """(connector radius, loop radius) → whether some valid row holds it."""
+    cons = Constraints(model.levels, model.forbidden)
+    col = {p.element: i for i, p in enumerate(model.parameters) if p.feature is Feature.RADIUS_M}
+    vc, vl = model.parameters[col[connector]].values, model.parameters[col[loop]].values
+    return {(a, b): cons.extendable({col[connector]: i, col[loop]: j})
+            for i, a in enumerate(vc) for j, b in enumerate(vl)}
+
+
+@pytest.mark.parametrize("design, pairs", [
+    ("cloverleaf", [("oA1", "lB1"), ("oA2", "lB2"), ("oB1", "lA2"), ("oB2", "lA1")]),
+    ("cloverstack", [("oA1", "lB1"), ("oA2", "lB2")]),
+])
+def test_an_outer_connector_must_be_wider_than_its_loop_and_nothing_else_is_forbidden(
+        design, pairs):
+    topo = catalog_topologies()[design]
+    assert [(p.connector, p.loop) for p in round_loops(topo)] == pairs
+    profile = default_profile()
+    model = feature_model(topo, profile, forbidden_features(topo, profile))
+    # one lane each: the connector's 4 m, half the loop's and 1 m between centre lines
+    assert {p.margin_m for p in round_loops(topo)} == {7.0}
+    for connector, loop in pairs:
+        allowed = _pair_allowed(model, connector, loop)
+        assert allowed == {(a, b): math.isfinite(a) and math.isfinite(b) and a >= b + 7.0
+                           for a, b in allowed}
+        assert allowed[(40.0, 30.0)] and not allowed[(40.0, 40.0)] and not allowed[(30.0, 40.0)]
+    # a connector and another pair's loop are not constrained together: only what their
+    # own loop / connector implies (no connector of 30 m: no loop is tighter by 7 m; no
+    # loop of 280 m: no connector is wider)
+    connector, other = pairs[0][0], pairs[1][1]
+    assert _pair_allowed(model, connector, other) == {
+        (a, b): 30.0 < a < math.inf and b < 280.0
+        for a, b in _pair_allowed(model, connector, other)}
+    # without the rule the same model allows the tight pairs (the rule is what forbids them)
+    loose = feature_model(topo, profile, [r for r in forbidden_features(topo, profile)
+                                          if len(r.elements) == 1])
+    assert _pair_allowed(loose, *pairs[0])[(30.0, 280.0)]
+
+
+def test_designs_without_loops_or_without_outer_connectors_have_no_pairs():
+    topos = catalog_topologies()
+    for design in ("j1", "trumpet", "stack4", "diamond", "turbine", "cloverleaf_cd"):
+        if design in topos:
+            assert round_loops(topos[design]) == (), design
+
+
+def test_the_pairs_come_from_the_topology_not_its_names(tmp_path):
+    from tests.test_osm import cloverleaf_ways, only, write_osm
+
+    osm = only(write_osm(tmp_path / "clover.osm", cloverleaf_ways()))
+    pairs = round_loops(osm)
+    assert len(pairs) == 4 and len({p.connector for p in pairs} | {p.loop for p in pairs}) == 8
+    renamed = catalog_topologies()["cloverstack"].relabeled(
+        {r: f"w{k}" for k, r in enumerate(catalog_topologies()["cloverstack"].ramps)})
+    names = dict(zip(catalog_topologies()["cloverstack"].ramps, renamed.ramps))
+    assert [(p.connector, p.loop) for p in round_loops(renamed)] == \
+        [(names["oA1"], names["lB1"]), (names["oA2"], names["lB2"])]
+
+
+def test_the_sampled_array_keeps_every_connector_wider_and_covers_the_rest():
+    topo = catalog_topologies()["cloverstack"]
+    profile = default_profile()
+    s = sample_topology(topo, profile, t=2, seed=11, fixed=fixed_features(topo),
+                        extra=forbidden_features(topo, profile))
+    radius = {}
+    for r in s.feature_rows():
+        radius[r["sample"], r["element"]] = r["radius_m"]
+    for p in round_loops(topo):
+        held = {(radius[k, p.connector], radius[k, p.loop]) for k in range(s.coverage.rows)}
+        assert all(p.allows(a, b) for a, b in held)
+        # every allowed pair of the domain's finite radii is in some row (2-way coverage)
+        finite = [v for v in profile.domain(Kind.RAMP)[Feature.RADIUS_M] if math.isfinite(v)]
+        assert held == {(a, b) for a in finite for b in finite if p.allows(a, b)}
+    # connector 30 and loop 280 are in no valid row (implied): required = extendable
+    cons = Constraints(s.model.levels, s.model.forbidden)
+    covered, total = independent_coverage(s.array.rows, s.model.levels, 2,
+                                          cells(s.model.forbidden), cons.extendable)
+    assert covered == total == s.coverage.tuples_total

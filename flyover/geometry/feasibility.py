@@ -54,11 +54,34 @@ ramp longer than any real one: it is forbidden on that ramp too.
 ['r1', 'r2', 'r3', 'r4']
 >>> sorted(turning_ramps(catalog_topologies()["turbine"]))[:3]
 ['lA1', 'lA2', 'lB1']
+
+**Outer connectors round their loops.** A cloverleaf's or parclo's outer connector
+and the loop that joins the same two roads the other way round, on the road they
+share (:meth:`flyover.geometry.chains.Movements.goes_round_loop`), lie in one
+quadrant, the connector outside: real ones are two nearly concentric curves, the
+connector's the wider. A connector sampled tighter than its loop can go round it only
+by an S-bend or a corner that no real one has, and the fit often takes it over or
+under the loop instead (a bridge the design does not have). So the connector's radius
+must exceed its loop's by the room between their centre lines
+(:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as the
+layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
+(connector radius, loop radius) that does not is forbidden (:func:`round_loops`; ``inf``
+counts as ``inf_reference_m``, the radius it is built with). The pairs are read from
+the topology and the road layout, not from a design's name, so an OSM cloverleaf gets
+them too.
+
+>>> [(p.connector, p.loop) for p in round_loops(catalog_topologies()["cloverstack"])]
+[('oA1', 'lB1'), ('oA2', 'lB2')]
+>>> round_loops(catalog_topologies()["cloverstack"])[0].allows(60.0, 40.0)
+True
+>>> round_loops(catalog_topologies()["cloverstack"])[0].allows(60.0, 60.0)
+False
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Callable
 
 from flyover.geometry.chains import Movements
@@ -67,11 +90,11 @@ from flyover.geometry.levels import LevelPlan
 from flyover.geometry.profile import climb_distance
 from flyover.geometry.roads import layout_roads
 from flyover.geometry.settings import LayoutSettings
-from flyover.sampling.model import ElementCondition, Feature, ForbidRule, Profile
+from flyover.sampling.model import ElementCondition, Feature, ForbidRule, Profile, Relation
 from flyover.topology.model import Kind, Topology
 
 __all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "fixed_features", "turning_ramps",
-           "forbidden_features", "ramp_need_m"]
+           "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m"]
 
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
@@ -133,6 +156,55 @@ def turning_ramps(topology: Topology) -> frozenset[str]:
     return frozenset(out)
 
 
+@dataclass(frozen=True)
+class RoundLoop:
+    """An outer connector and the loop it goes round (:func:`round_loops`).
+
+    Attributes
+    ----------
+    connector, loop
+        Ramp ids.
+    margin_m
+        How much wider than the loop's radius the connector's must be: the room between
+        their centre lines (the connector's width, half the loop's, 1 m).
+    inf_reference_m
+        The radius a target of ``inf`` is built with.
+    """
+
+    connector: str
+    loop: str
+    margin_m: float
+    inf_reference_m: float = 250.0
+
+    def allows(self, connector_radius_m: float, loop_radius_m: float) -> bool:
+        """Whether a connector of this radius target can go round a loop of that one."""
+        def built(r: float) -> float:
+            return r if math.isfinite(r) else self.inf_reference_m
+
+        return built(connector_radius_m) >= built(loop_radius_m) + self.margin_m
+
+
+def round_loops(topology: Topology, settings: LayoutSettings | None = None
+                ) -> tuple[RoundLoop, ...]:
+    """Every outer connector of ``topology`` and the loop it goes round: the loop joining
+    the same two roads the other way round, on a road they share
+    (:meth:`flyover.geometry.chains.Movements.goes_round_loop`, on the road layout of
+    :mod:`flyover.geometry.roads`, which does not depend on the sample); in ramp id order."""
+    st = settings or LayoutSettings()
+    roads = layout_roads(topology, {}, st)
+    moves = Movements(topology, roads)
+    on = {r: {e[0] for e in _ends(topology, r) if e is not None and e[0] in roads}
+          for r in topology.ramps}
+    out = []
+    for ramp in topology.ramps:
+        for loop in topology.ramps:
+            if loop != ramp and any(moves.goes_round_loop(ramp, loop, road)
+                                    for road in sorted(on[ramp] & on[loop])):
+                margin = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
+                out.append(RoundLoop(ramp, loop, margin, st.fit.inf_reference_m))
+    return tuple(out)
+
+
 def ramp_need_m(topology: Topology, settings: LayoutSettings | None = None
                 ) -> dict[str, "Callable[[float, float], float]"]:
     """Ramp → ``need(radius_m, slope_pct)``: the length (m) a ramp between two roads needs
@@ -171,9 +243,11 @@ def ramp_need_m(topology: Topology, settings: LayoutSettings | None = None
 def forbidden_features(topology: Topology, profile: Profile | None = None,
                        settings: LayoutSettings | None = None) -> tuple[ForbidRule, ...]:
     """The feature values geometry cannot build on ``topology``: radius ``inf`` on every
-    turning ramp (:func:`turning_ramps`), and on a ramp between two roads every (radius,
+    turning ramp (:func:`turning_ramps`), on a ramp between two roads every (radius,
     slope) of ``profile``'s domain whose need (:func:`ramp_need_m`) exceeds
-    ``max_ramp_length_m`` (the ``settings``, else the defaults). For ``extra=`` of
+    ``max_ramp_length_m`` (the ``settings``, else the defaults), and every (connector
+    radius, loop radius) of an outer connector and its loop (:func:`round_loops`) that
+    :meth:`RoundLoop.allows` does not. For ``extra=`` of
     :func:`flyover.sampling.sample.sample_topology`."""
     st = settings or LayoutSettings()
     domain = profile.domain(Kind.RAMP) if profile is not None else {}
@@ -191,4 +265,13 @@ def forbidden_features(topology: Topology, profile: Profile | None = None,
             if long:
                 cond = ((Feature.RADIUS_M, frozenset({r})), (Feature.SLOPE_PCT, long))
                 rules.append(ForbidRule((ElementCondition(Kind.RAMP, cond, ramp),)))
+    for pair in round_loops(topology, st):
+        for r in radii:
+            tight = frozenset(v for v in radii if not pair.allows(r, v))
+            if tight:
+                rules.append(ForbidRule(
+                    (ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, frozenset({r})),),
+                                      pair.connector),
+                     ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, tight),), pair.loop)),
+                    Relation.ANY))
     return tuple(rules)

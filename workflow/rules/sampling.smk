@@ -5,7 +5,8 @@
 # 2: slope fixed at 0 on level ramps (flyover.geometry.feasibility), not sampled.
 # 3: per-ramp domains from the layout (no radius inf on a turning ramp, no (radius, slope) a
 #    ramp cannot build within geometry.max_ramp_length_m): the geometry section feeds them.
-SAMPLING_VERSION = 3
+# 4: an outer connector's radius exceeds its loop's (flyover.geometry.feasibility.round_loops)
+SAMPLING_VERSION = 4
 
 
 rule sample_class:
