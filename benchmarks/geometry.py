@@ -52,6 +52,7 @@ import numpy as np  # noqa: E402
 from flyover.config import load_config  # noqa: E402
 from flyover.geometry._kernels import HOLD_M  # noqa: E402
 from flyover.geometry.bezier import sample_spline  # noqa: E402
+from flyover.geometry.dubins import shortest  # noqa: E402
 from flyover.geometry.profile import climb_distance, evaluate_polys  # noqa: E402
 from flyover.opendrive.reader import read_xodr  # noqa: E402
 from flyover.opendrive.writer import xodr_bytes  # noqa: E402
@@ -154,8 +155,10 @@ def _build(job: tuple[str, int]) -> tuple:
               for p in round_pairs(topo, settings)]
     rows = geometry_rows(ic)
     stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
+    detour = {o.ramp: o.fit.length_m / least_m(o.fit, settings) for o in ic.outcomes}
     for r in rows:
         r["stretch"] = stretch[r["ramp"]]
+        r["detour"] = detour[r["ramp"]]
     xodr = remeasure(ic.geometry)
     for r in rows:
         r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
@@ -227,6 +230,32 @@ def need_m(fit, settings) -> float:
     tr = settings.fit.transition_m
     climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
     return max(abs(sp.turn_rad) * r, climb) + 2.0 * settings.gap_m
+
+
+def least_m(fit, settings, n: int = 24) -> float:
+    """The least a ramp between two attachment windows can be long (NaN for a stub or a
+    collector-distributor road): the longest of the shortest path of curvature at most
+    1 / (0.95 × its radius target) (``inf``: ``inf_min_radius_m``) from a point of its
+    start window heading along its parent to one of its end window
+    (:func:`flyover.geometry.dubins.shortest`, the windows sampled at ``n`` stations), its
+    turn at that radius, and its climb from each end to its crest at its slope target. A
+    ramp much longer than this detours: where its ends may attach, its radius and its
+    climb do not ask for that length."""
+    sp = fit.spec
+    a, b = sp.start, sp.end
+    if a is None or b is None or sp.free is not None or a.parent == b.parent:
+        return math.nan
+    r = 0.95 * sp.target_radius_m if math.isfinite(sp.target_radius_m) else \
+        settings.inf_min_radius_m
+    pa, ha, _ = a.at(np.linspace(a.lo, a.hi, n))
+    pb, hb, _ = b.at(np.linspace(b.lo, b.hi, n))
+    path = float(shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r).min())
+    g = max(sp.target_slope_pct, 0.5) / 100.0
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    top = max(fit.z_crest, za, zb)
+    tr = settings.fit.transition_m
+    climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
+    return max(path, abs(sp.turn_rad) * r, climb)
 
 
 def footprint(ic) -> tuple[float, float]:
@@ -533,6 +562,17 @@ def main() -> None:
     for name, xs in sorted(ratios.items()) + [("total", [r["stretch"] for r in rows])]:
         print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
               f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)} of {len(xs)}")
+    print("ramp length / the least it can be (between its windows at its radius, its turn, "
+          "its climb; benchmarks.geometry.least_m; ramps between two windows):")
+    detours: dict[str, list[float]] = {}
+    for r in rows:
+        if math.isfinite(r["detour"]):
+            detours.setdefault(names[r["class_id"]], []).append(r["detour"])
+    every = [x for xs in detours.values() for x in xs]
+    for name, xs in sorted(detours.items()) + ([("total", every)] if every else []):
+        print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
+              f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)}, over 2: "
+              f"{sum(x > 2 for x in xs)} of {len(xs)}")
     print("footprint (bounding box of the ramps, km²):")
     for name, bs in sorted(boxes.items()):
         print(f"  {name:<17} median {np.median(bs):6.2f}  max {max(bs):6.2f}  (n={len(bs)})")
