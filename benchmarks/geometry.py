@@ -155,7 +155,8 @@ def _build(job: tuple[str, int]) -> tuple:
               for p in round_pairs(topo, settings)]
     rows = geometry_rows(ic)
     stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
-    detour = {o.ramp: o.fit.length_m / least_m(o.fit, settings) for o in ic.outcomes}
+    detour = {o.ramp: o.fit.length_m / least_m(o.fit, settings) if o.fit.ok else math.nan
+              for o in ic.outcomes}  # a ramp off its radius can be shorter than the least
     for r in rows:
         r["stretch"] = stretch[r["ramp"]]
         r["detour"] = detour[r["ramp"]]
@@ -563,7 +564,7 @@ def main() -> None:
         print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
               f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)} of {len(xs)}")
     print("ramp length / the least it can be (between its windows at its radius, its turn, "
-          "its climb; benchmarks.geometry.least_m; ramps between two windows):")
+          "its climb; benchmarks.geometry.least_m; ramps between two windows, within targets):")
     detours: dict[str, list[float]] = {}
     for r in rows:
         if math.isfinite(r["detour"]):
