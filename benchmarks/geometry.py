@@ -52,6 +52,7 @@ import numpy as np  # noqa: E402
 from flyover.config import load_config  # noqa: E402
 from flyover.geometry._kernels import HOLD_M  # noqa: E402
 from flyover.geometry.bezier import sample_spline  # noqa: E402
+from flyover.geometry.dubins import shortest  # noqa: E402
 from flyover.geometry.profile import climb_distance, evaluate_polys  # noqa: E402
 from flyover.opendrive.reader import read_xodr  # noqa: E402
 from flyover.opendrive.writer import xodr_bytes  # noqa: E402
@@ -101,6 +102,33 @@ def drawn_feature_sets(topology, profile, n, seed):
     return out
 
 
+def real_feature_set(topology, profile, slope_pct: float):
+    """One feature set from what the real interchange has: each ramp's radius target is
+    the domain value nearest (in ratio) to its OSM ``min_radius_m`` (a finite one on a
+    ramp that must turn), its slope ``slope_pct`` (OSM has no heights), the lanes of its
+    roads the domain value nearest to their OSM ``lanes``; features geometry fixes up
+    front are set as in :func:`drawn_feature_sets`."""
+    from flyover.geometry.feasibility import fixed_features, turning_ramps
+    from flyover.sampling.model import Feature
+
+    fixed = fixed_features(topology)
+    turning = turning_ramps(topology)
+    radii = [float(v) for v in profile["ramp"]["radius_m"]]
+    lanes_dom = [int(v) for v in profile["road"]["lanes"]]
+    nodes = topology.graph.nodes
+
+    def radius(r):
+        real = float(nodes[r].get("min_radius_m") or math.inf)
+        dom = [v for v in radii if math.isfinite(v)] if r in turning else radii
+        return min(dom, key=lambda v: abs(math.log(min(v, 1e4) / min(real, 1e4))))
+
+    lanes = {r: min(lanes_dom, key=lambda v: abs(v - int(nodes[r].get("lanes") or 0)))
+             for r in topology.roads}
+    ramps = {r: RampFeatures(radius(r), float(fixed.get((r, Feature.SLOPE_PCT), slope_pct)))
+             for r in topology.ramps}
+    return {0: (lanes, ramps)}
+
+
 #: what the workers build from (set before they fork): class id → (design, topology, sets)
 _WORK: dict = {}
 
@@ -127,14 +155,40 @@ def _build(job: tuple[str, int]) -> tuple:
               for p in round_pairs(topo, settings)]
     rows = geometry_rows(ic)
     stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
+    detour = {o.ramp: o.fit.length_m / least_m(o.fit, settings) if o.fit.ok else math.nan
+              for o in ic.outcomes}  # a ramp off its radius can be shorter than the least
     for r in rows:
         r["stretch"] = stretch[r["ramp"]]
+        r["detour"] = detour[r["ramp"]]
     xodr = remeasure(ic.geometry)
     for r in rows:
         r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
             xodr.get(r["ramp"], (math.nan,) * 4)
     return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
             bridges, footprint(ic), grade_jumps(ic.geometry), rounds)
+
+
+def print_real_comparison(rows, names, real_by_ramp) -> None:
+    """Generated / real length of each ramp (the same topology, the real radii)."""
+    print("generated / real length, ramp by ramp (the real radii as targets):")
+    every = []
+    for cid in sorted(real_by_ramp, key=lambda c: names.get(c, c)):
+        pairs = [(r["length_m"], real_by_ramp[cid][r["ramp"]], r["ramp"],
+                  r["target_radius_m"]) for r in rows
+                 if r["class_id"] == cid and r["ramp"] in real_by_ramp[cid]]
+        if not pairs:
+            continue
+        ratio = [g / max(real, 1.0) for g, real, _, _ in pairs]
+        every += ratio
+        worst = max(pairs, key=lambda p: p[0] / max(p[1], 1.0))
+        print(f"  {names[cid]:<17} median {np.median(ratio):5.2f}  max {max(ratio):5.2f}  "
+              f"(n={len(ratio)}; generated median {np.median([p[0] for p in pairs]):5.0f} m, "
+              f"real {np.median([p[1] for p in pairs]):5.0f} m; longest relative: {worst[2]} "
+              f"R {worst[3]:g} {worst[0]:.0f} vs {worst[1]:.0f} m)")
+    if every:
+        print(f"  {'total':<17} median {np.median(every):5.2f}  p95 "
+              f"{np.percentile(every, 95):5.2f}  over 1.5: {sum(x > 1.5 for x in every)} of "
+              f"{len(every)}")
 
 
 def round_pairs(topo, settings) -> list[tuple[str, str]]:
@@ -177,6 +231,32 @@ def need_m(fit, settings) -> float:
     tr = settings.fit.transition_m
     climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
     return max(abs(sp.turn_rad) * r, climb) + 2.0 * settings.gap_m
+
+
+def least_m(fit, settings, n: int = 24) -> float:
+    """The least a ramp between two attachment windows can be long (NaN for a stub or a
+    collector-distributor road): the longest of the shortest path of curvature at most
+    1 / (0.95 × its radius target) (``inf``: ``inf_min_radius_m``) from a point of its
+    start window heading along its parent to one of its end window
+    (:func:`flyover.geometry.dubins.shortest`, the windows sampled at ``n`` stations), its
+    turn at that radius, and its climb from each end to its crest at its slope target. A
+    ramp much longer than this detours: where its ends may attach, its radius and its
+    climb do not ask for that length."""
+    sp = fit.spec
+    a, b = sp.start, sp.end
+    if a is None or b is None or sp.free is not None or a.parent == b.parent:
+        return math.nan
+    r = 0.95 * sp.target_radius_m if math.isfinite(sp.target_radius_m) else \
+        settings.inf_min_radius_m
+    pa, ha, _ = a.at(np.linspace(a.lo, a.hi, n))
+    pb, hb, _ = b.at(np.linspace(b.lo, b.hi, n))
+    path = float(shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r).min())
+    g = max(sp.target_slope_pct, 0.5) / 100.0
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    top = max(fit.z_crest, za, zb)
+    tr = settings.fit.transition_m
+    climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
+    return max(path, abs(sp.turn_rad) * r, climb)
 
 
 def footprint(ic) -> tuple[float, float]:
@@ -366,6 +446,10 @@ def main() -> None:
     ap.add_argument("--osm", nargs="*", type=Path, metavar="FILE",
                     help="build the interchanges of these .osm extracts instead of the catalog "
                          "(feature sets drawn from the domains)")
+    ap.add_argument("--real-features", type=float, metavar="SLOPE_PCT",
+                    help="with --osm: build each interchange once with the real ramps' radii "
+                         "(nearest domain value) and this slope target, and compare lengths "
+                         "ramp by ramp with the real ones")
     ap.add_argument("--show-misses", type=int, default=0,
                     help="print this many ramps whose re-measured radius or slope misses")
     ap.add_argument("--show-rounds", type=int, default=0,
@@ -378,7 +462,7 @@ def main() -> None:
     settings = LayoutSettings.from_config(cfg["geometry"])
     profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
     seed = int(cfg["seed"])
-    rows, per_ic, names, fits, real = [], [], {}, [], {}
+    rows, per_ic, names, fits, real, real_by_ramp = [], [], {}, [], {}, {}
     jobs = []
     for name, topo in topologies(args.osm).items():
         if args.designs and name not in args.designs:
@@ -389,7 +473,11 @@ def main() -> None:
         names[cid] = name
         real[name] = [float(topo.graph.nodes[r]["length_m"]) for r in topo.ramps
                       if topo.graph.nodes[r].get("length_m")]
-        if args.from_results:
+        real_by_ramp[cid] = {r: float(topo.graph.nodes[r]["length_m"]) for r in topo.ramps
+                             if topo.graph.nodes[r].get("length_m")}
+        if args.real_features is not None:
+            sets = real_feature_set(topo, profile, args.real_features)
+        elif args.from_results:
             sets = read_feature_sets(f"results/features/{cid}.parquet")
         else:
             sets = drawn_feature_sets(topo, profile, args.samples, seed)
@@ -465,6 +553,8 @@ def main() -> None:
             print(f"   real: median {np.median(rl):6.0f}  p95 {np.percentile(rl, 95):6.0f}  "
                   f"max {max(rl):6.0f}  (n={len(rl)})", end="")
         print()
+    if args.real_features is not None:
+        print_real_comparison(rows, names, real_by_ramp)
     print("ramp length / what it needs (its turn at its radius or its climb at its slope, "
           "and two tapers; benchmarks.geometry.need_m):")
     ratios: dict[str, list[float]] = {}
@@ -473,6 +563,17 @@ def main() -> None:
     for name, xs in sorted(ratios.items()) + [("total", [r["stretch"] for r in rows])]:
         print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
               f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)} of {len(xs)}")
+    print("ramp length / the least it can be (between its windows at its radius, its turn, "
+          "its climb; benchmarks.geometry.least_m; ramps between two windows, within targets):")
+    detours: dict[str, list[float]] = {}
+    for r in rows:
+        if math.isfinite(r["detour"]):
+            detours.setdefault(names[r["class_id"]], []).append(r["detour"])
+    every = [x for xs in detours.values() for x in xs]
+    for name, xs in sorted(detours.items()) + ([("total", every)] if every else []):
+        print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
+              f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)}, over 2: "
+              f"{sum(x > 2 for x in xs)} of {len(xs)}")
     print("footprint (bounding box of the ramps, km²):")
     for name, bs in sorted(boxes.items()):
         print(f"  {name:<17} median {np.median(bs):6.2f}  max {max(bs):6.2f}  (n={len(bs)})")
