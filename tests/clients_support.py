@@ -80,8 +80,7 @@ def write_design(tmp_path, name, variant=0):
 
 #: designs whose verifier case fails for a reason not traced (README): strict xfail, so the
 #: case still runs and CI says so when it starts to pass
-FAILING: dict[str, str] = {"cloverleaf_cd": "a loop ramp passes over itself (2D): attributed by "
-                                            "level_gap; the verifier case not yet rerun"}
+FAILING: dict[str, str] = {}
 
 
 def verifier_designs(part: int, parts: int = 2) -> list:
