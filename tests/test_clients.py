@@ -9,14 +9,14 @@ import pytest
 from lxml import etree
 
 from flyover.clients.designs import catalog_geometry, catalog_names
-from flyover.clients.links import dangling_lanes, link_gaps
+from flyover.clients.links import dangling_lanes, level_gap, levels_at, link_gaps
 from flyover.clients.tools import ClientsError, find_clients_python, routed_movements, run_clients, \
     two_movement_trips
 from flyover.geometry.model import write_geometry
 from flyover.opendrive.continuity import check_continuity
 from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.validate import movements
-from tests.clients_support import TOLERANCE_M, check_verifier, clients_python, write_design  # noqa: F401
+from tests.clients_support import LEVELS_APART_M, TOLERANCE_M, check_verifier, clients_python, write_design  # noqa: F401
 
 #: movements Lanelet2 does not route (design, feature set): the Lanelet2 export of
 #: commonroad-scenario-designer 0.8.5 starts the deceleration lane's lanelet where no
@@ -62,6 +62,45 @@ def test_gore_shoulder_opens_from_zero_width_inside_the_junction(tmp_path):
               for lid, ln in r.sections[0].lanes.items()
               if ln.type == "shoulder" and abs(float(ln.width(0.0)[0])) < 1e-9]
     assert opened  # the branch whose shoulder is not the parent's begins at zero width
+
+
+def test_a_road_over_itself_is_two_levels_a_clearance_apart_where_it_crosses(tmp_path):
+    # cloverleaf C-D's loop lA1 turns 343 degrees and its end passes under its own climb:
+    # the lanelet CommonRoad makes of it crosses itself in 2D (the verifier's self- and
+    # polylines intersections). Its lane borders from the .xodr: where they cross, the file
+    # has the loop at two heights 5.9 m apart (3.0 m before road positions were written
+    # within 5 cm of arc length), more than the pipeline's 5.5 m clearance.
+    import numpy as np
+    _, path = _write(tmp_path, "cloverleaf_cd")
+    net = read_xodr(path)
+    roads = [r for r in net.roads.values() if r.name == "lA1" and r.junction == "-1"]
+    [loop] = roads
+    s = np.linspace(0.0, loop.length, int(loop.length / 0.5))
+    x, y, _, h = loop.reference(s)
+    t = np.array([loop.lane_t(-1, float(si), at_end=i == len(s) - 1)[1] for i, si in enumerate(s)])
+    border = np.stack([x - t * np.sin(h), y + t * np.cos(h)], axis=1)
+    crossings = []  # non-adjacent segments of the outer border that intersect
+    for i in range(len(border) - 3):
+        p, r = border[i], border[i + 1] - border[i]
+        q, d = border[i + 2:-1], border[i + 3:] - border[i + 2:-1]
+        den = r[0] * d[:, 1] - r[1] * d[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = ((q - p)[:, 0] * d[:, 1] - (q - p)[:, 1] * d[:, 0]) / den
+            v = ((q - p)[:, 0] * r[1] - (q - p)[:, 1] * r[0]) / den
+        crossings += [p + u[k] * r for k in np.flatnonzero((u >= 0) & (u <= 1) & (v >= 0) & (v <= 1))]
+    assert len(crossings) == 1
+    passes = [(road, z) for road, _, z in levels_at(net, *crossings[0]) if road == loop.id]
+    assert len(passes) == 2
+    assert level_gap(net, *crossings[0]) >= LEVELS_APART_M
+
+
+def test_one_level_is_no_level_gap(tmp_path):
+    _, path = _write(tmp_path, "trumpet")
+    net = read_xodr(path)
+    road = next(r for r in net.roads.values() if r.junction == "-1")
+    x, y, _, _ = road.reference(road.length / 2)
+    assert len(levels_at(net, float(x[0]), float(y[0]))) >= 1
+    assert level_gap(net, float(x[0]), float(y[0])) < LEVELS_APART_M
 
 
 # -- the clients ------------------------------------------------------------------------

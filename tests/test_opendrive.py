@@ -52,6 +52,27 @@ def test_roads_are_lines_and_ramps_are_normalized_parampoly3(xodrs, kind):
 
 
 @pytest.mark.parametrize("kind", SAMPLES)
+def test_a_ramps_height_where_a_reader_puts_it_is_the_geometrys_height_there(xodrs, kind):
+    # readers place road position s of a normalized paramPoly3 at p = s/length, not at arc
+    # length s, while heights are written along arc length: one paramPoly3 per Bézier piece
+    # put a ramp's heights up to 47 m (here; 356 m on the catalog) from their place
+    from flyover.geometry.bezier import sample_spline
+    from flyover.geometry.profile import evaluate_polys
+    g, net = sample_geometry(kind), read_xodr(xodrs[kind])
+    worst = 0.0
+    for ramp in g.ramps:
+        smp = sample_spline(np.array([p.p for p in ramp.plan], float), 4000)
+        z_geo, _ = evaluate_polys(ramp.elevation, smp.s)
+        for road in (r for r in net.roads.values() if r.name == ramp.id):
+            x, y, z, _ = road.reference(np.linspace(0.0, road.length, 41)[1:-1])
+            for xi, yi, zi in zip(x, y, z):
+                d = np.hypot(smp.xy[:, 0] - xi, smp.xy[:, 1] - yi)
+                assert d.min() < 0.6  # on the ramp (its ends snapped by at most 0.5 m)
+                worst = max(worst, abs(zi - z_geo[np.argmin(d)]))
+    assert worst < 0.01, worst
+
+
+@pytest.mark.parametrize("kind", SAMPLES)
 def test_links_agree_both_ways(xodrs, kind):
     net = read_xodr(xodrs[kind])
     for r in net.roads.values():

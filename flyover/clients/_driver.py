@@ -69,7 +69,13 @@ def _verify(network, exclude=()):
     out = {"ok": True, "errors": counts, "examples": examples, "formulas": len(every),
            "crashed": crashed,
            "connection_gaps_m": _connection_gaps(network, locations_of),
-           "intersections": _intersections(network, locations_of.get("polylines_intersection", []))}
+           "intersections": _intersections(network, locations_of.get("polylines_intersection", [])),
+           "self_crossings": [
+               {"lanelet": int(loc[0] if isinstance(loc, (tuple, list)) else loc), "side": side,
+                "points": _crossings(getattr(network.find_lanelet_by_id(
+                    int(loc[0] if isinstance(loc, (tuple, list)) else loc)), f"{side}_vertices"))}
+               for side in ("left", "right")
+               for loc in locations_of.get(f"{side}_self_intersection", [])]}
     if "left_right_boundary_assignment" in crashed:
         out["boundary_sides"] = _boundary_sides(network)
     return out
@@ -131,9 +137,32 @@ def _connection_gaps(network, locations_of):
     return out
 
 
+def _crossings(a, b=None):
+    """Where polyline ``a`` crosses ``b`` (or itself, non-adjacent segments, when ``b`` is
+    None): ``[[x, y], ...]``."""
+    import numpy as np
+
+    a = np.asarray(a, dtype=float)
+    b = a if b is None else np.asarray(b, dtype=float)
+    p, r = a[:-1], a[1:] - a[:-1]
+    q, t = b[:-1], b[1:] - b[:-1]
+    out = []
+    for i in range(len(p)):
+        den = r[i, 0] * t[:, 1] - r[i, 1] * t[:, 0]
+        qp = q - p[i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = (qp[:, 0] * t[:, 1] - qp[:, 1] * t[:, 0]) / den
+            v = (qp[:, 0] * r[i, 1] - qp[:, 1] * r[i, 0]) / den
+        hit = (den != 0) & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
+        if b is a:
+            hit[max(i - 1, 0):i + 2] = False
+        out += [(p[i] + u[k] * r[i]).tolist() for k in np.flatnonzero(hit)]
+    return out
+
+
 def _intersections(network, locations):
     """Each lanelet whose left and right boundaries the verifier finds intersecting:
-    its width at both ends and the least width between them."""
+    its width at both ends and the least width between them, and where they cross."""
     import numpy as np
 
     out = []
@@ -144,7 +173,8 @@ def _intersections(network, locations):
         w = np.linalg.norm(ll.left_vertices - ll.right_vertices, axis=1)
         out.append({"lanelet": int(ll.lanelet_id), "type": str(getattr(ll, "lanelet_type", "")),
                     "width_start_m": float(w[0]), "width_end_m": float(w[-1]),
-                    "min_inner_width_m": float(w[1:-1].min()) if len(w) > 2 else None})
+                    "min_inner_width_m": float(w[1:-1].min()) if len(w) > 2 else None,
+                    "crossings": _crossings(ll.left_vertices, ll.right_vertices)})
     return out
 
 
@@ -269,6 +299,16 @@ def _attribute(path, stock_network):
         errs = formula_errors(net)
         out[name] = {"errors": {k: len(v) for k, v in errs.items()},
                      "max_gap_m": {k: max(g for _, g in v) for k, v in errs.items()}}
+        if name == "exact_s_no_join_split":
+            # bounds that cross where the lanelet is not zero wide at an end: where they cross
+            wide = [ll for ll in net.lanelets
+                    if min(np.linalg.norm(ll.left_vertices[i] - ll.right_vertices[i])
+                           for i in (0, -1)) >= 1e-6]
+            out[name]["wide_intersections"] = [
+                {"lanelet": int(ll.lanelet_id), "crossings": c} for ll in wide
+                for c in [_crossings(ll.left_vertices, ll.right_vertices)] if c]
+            out[name]["wide_intersection_errors"] = sum(
+                g >= 1e-6 for _, g in errs.get("polylines_intersection", []))
         if name == "stock":
             stock = errs
         elif name == "exact_s":

@@ -5,7 +5,9 @@ esmini-style players) need every lane that continues across a road end to
 be linked there, shoulders included. :func:`dangling_lanes` lists the lanes
 that do not; :func:`link_gaps` measures how far apart the borders of two
 linked lanes are at the link (the figure that tells a client's tolerance
-from our geometry).
+from our geometry). :func:`levels_at` lists the heights at which roads pass over
+a point of the plan: where a client working in 2D sees lanes cross, whether the
+file has them at different levels.
 """
 
 from __future__ import annotations
@@ -13,9 +15,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from flyover.opendrive.reader import XodrNetwork, XodrRoad
 
-__all__ = ["DanglingLane", "dangling_lanes", "link_gaps"]
+__all__ = ["DanglingLane", "dangling_lanes", "link_gaps", "levels_at", "level_gap"]
 
 _ZERO_M = 1e-6
 
@@ -110,3 +114,43 @@ def link_gaps(net: XodrNetwork) -> list[tuple[str, int, str, int, float]]:
                 gap = max(math.dist(a[0], b[0]), math.dist(a[1], b[1]))
                 out.append((road.id, lid, nxt.id, n, gap))
     return out
+
+
+def levels_at(net: XodrNetwork, x: float, y: float, step_m: float = 0.25, tol_m: float = 0.1
+              ) -> list[tuple[str, float, float]]:
+    """Every pass of a road over the plan point ``(x, y)``: ``(road, s, z)``.
+
+    A pass is a run of the road's stations (every ``step_m``) whose cross-section, from
+    its outermost left lane border to its outermost right one (widened by ``tol_m``),
+    runs through the point; ``s`` and ``z`` are the reference line's at the station
+    nearest the point along the road. A road that passes over itself (a loop that turns
+    more than a full circle, at another height) has two passes.
+    """
+    out = []
+    for road in net.roads.values():
+        n = max(2, int(math.ceil(road.length / step_m)) + 1)
+        s = np.linspace(0.0, road.length, n)
+        rx, ry, rz, h = road.reference(s)
+        dx, dy = x - rx, y - ry
+        along = dx * np.cos(h) + dy * np.sin(h)
+        lat = -dx * np.sin(h) + dy * np.cos(h)
+        near = np.flatnonzero(np.abs(along) <= step_m)
+        if not len(near):
+            continue
+        for run in np.split(near, np.flatnonzero(np.diff(near) > 1) + 1):
+            i = int(run[np.argmin(np.abs(along[run]))])
+            si = float(s[i])
+            sec = road.section_at(si, at_end=i == n - 1)
+            ts = [t for lid in ((max(sec.lanes), min(sec.lanes)) if sec.lanes else ())
+                  if lid != 0 for t in (road.lane_t(lid, si, at_end=i == n - 1) or ())]
+            if ts and min(ts) - tol_m <= lat[i] <= max(ts) + tol_m:
+                out.append((road.id, si, float(rz[i])))
+    return out
+
+
+def level_gap(net: XodrNetwork, x: float, y: float) -> float:
+    """The largest height gap between the road passes over ``(x, y)`` (:func:`levels_at`):
+    how far apart the two levels are that a 2D client puts on top of each other; 0 when
+    one level (or none) passes there."""
+    z = sorted(z for *_, z in levels_at(net, x, y))
+    return max(np.diff(z), default=0.0) if len(z) > 1 else 0.0

@@ -16,8 +16,11 @@ Model
 * ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
   a direct road link; lane counts and widths change smoothly on the ramp.
 * Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
-  pRange="normalized">`` (exact), heights ``<elevation>`` cubics of s (exact
-  re-basing of the geometry's profile), every lane followed by a shoulder.
+  pRange="normalized">`` (exact), each cut into parts on which a reader's
+  road position s (``p = s/length``) is within 5 cm of arc length
+  (:func:`flyover.opendrive.curves.uniform_parts`), heights ``<elevation>``
+  cubics of s (exact re-basing of the geometry's profile, along arc length),
+  every lane followed by a shoulder.
 
 The local frame is the geometry stage's: metres, x east, y north, z up,
 origin at the interchange centre, headings counter-clockwise from +x,
