@@ -18,12 +18,17 @@ from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.validate import movements
 from tests.clients_support import TOLERANCE_M, check_verifier, clients_python, write_design  # noqa: F401
 
-#: movements Lanelet2 does not route (design, feature set): the Lanelet2 export of
-#: commonroad-scenario-designer 0.8.5 starts the deceleration lane's lanelet where no
-#: lanelet ends (CommonRoad's own map gives it its predecessor), so no route leads onto
-#: the ramp; our lane links there are complete (no dangling lane, gaps < 1e-6 m). Inspected
-#: lanelet by lanelet on feature set 1; feature set 0 misses the same movement since the
-#: geometry's per-ramp domains (issue 18) changed its first feature set (not inspected)
+#: movements Lanelet2 does not route (design, feature set). j1, both feature sets: r3
+#: (R2→R4) and r2 merge at junction 1007 side by side into road 28 (lanes -2 and -1). In
+#: CommonRoad's map r3's lanelet (30 on feature set 1, 24 on 0) has road 28's lane -2 as
+#: its successor, its boundary ends on that lanelet's; the Lanelet2 export of
+#: commonroad-scenario-designer 0.8.5 starts that lanelet's left bound on the node of the
+#: way it shares with lane -1 (made from r2's end), and ends r3's on a second node at the
+#: same place, so r3 has no following lanelet and no route leads on to R4. Its nodes are
+#: shared only along predecessor/successor chains and adjacent ways
+#: (``cr2lanelet.py`` ``_create_nodes``), so which of two merging lanelets loses depends on
+#: the order it converts them: the same file with its roads written in reverse loses R1→R4
+#: too. Our lane links there are complete (no dangling lane, gaps < 1e-6 m).
 LANELET2_MISSES = {("j1", 0): {("R2", "R4")}, ("j1", 1): {("R2", "R4")}}
 
 
