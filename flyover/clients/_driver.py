@@ -1,8 +1,9 @@
 """Run inside the clients' environment (``.venv-clients``); never imported by flyover.
 
 Reads one JSON request from stdin: ``{"jobs": [{"xodr": path, "commonroad": path|null,
-"lanelet2": path|null, "verify": bool, "verify_exclude": [formula id, ...],
-"attribution": bool, "routing": bool, "pyopendrive": bool, "pyxodr": bool}, ...]}``
+"lanelet2": path|null, "lanelet2_shared_nodes": path|null, "verify": bool,
+"verify_exclude": [formula id, ...], "attribution": bool, "routing": bool,
+"pyopendrive": bool, "pyxodr": bool}, ...]}``
 and prints one JSON line per job, in order. Each client
 runs in its own ``try``: one failure is reported (type, message, where) and the
 others still run.
@@ -332,6 +333,38 @@ def _write_commonroad(scenario, path):
     return {"ok": True, "lanelets": len(back.lanelet_network.lanelets)}
 
 
+@contextlib.contextmanager
+def _nodes_shared_by_position():
+    """The converter's Lanelet2 export with one node per boundary point position (1 µm, z too
+    where the vertices have it).
+
+    Its ``_create_nodes`` shares nodes only along predecessor/successor chains and
+    adjacent ways: where two lanelets from different predecessors continue side by
+    side (a merge), the point their borders meet at becomes two nodes, and whichever
+    lanelet it converts later has no following lanelet in Lanelet2 although the
+    CommonRoad map has its successor. Here a new node is made only where none is yet.
+    """
+    from crdesigner.map_conversion.lanelet2.cr2lanelet import CR2LaneletConverter
+
+    make = CR2LaneletConverter._create_nodes_from_vertices
+
+    def shared(self, vertices):
+        at = self.__dict__.setdefault("_flyover_nodes_at", {})
+        out = []
+        for v in vertices:
+            key = tuple(round(float(c), 6) for c in v)
+            if key not in at:
+                at[key] = make(self, [v])[0]
+            out.append(at[key])
+        return out
+
+    CR2LaneletConverter._create_nodes_from_vertices = shared
+    try:
+        yield
+    finally:
+        CR2LaneletConverter._create_nodes_from_vertices = make
+
+
 def _lanelet2(scenario, path, routing):
     import lanelet2
     from crdesigner.map_conversion.lanelet2.cr2lanelet import CR2LaneletConverter
@@ -371,6 +404,11 @@ def _lanelet2(scenario, path, routing):
     out.update(sources={ll.id: ends[ll.id][0] for ll in sources},
                sinks={i: ends[i][1] for i in sinks}, routes=routes)
     return out
+
+
+def _shared_nodes(scenario, job):
+    with _nodes_shared_by_position():
+        return _lanelet2(scenario, job["lanelet2_shared_nodes"], job.get("routing"))
 
 
 def _pyopendrive(path):
@@ -423,8 +461,8 @@ def run(job):
         except Exception as e:  # noqa: BLE001
             res["pyxodr"] = _failure(e)
         res["seconds"]["pyxodr"] = time.perf_counter() - t
-    if not (job.get("commonroad") or job.get("lanelet2") or job.get("verify")
-            or job.get("attribution")):
+    if not (job.get("commonroad") or job.get("lanelet2") or job.get("lanelet2_shared_nodes")
+            or job.get("verify") or job.get("attribution")):
         return res
     from crdesigner.map_conversion.map_conversion_interface import opendrive_to_commonroad
 
@@ -439,6 +477,7 @@ def run(job):
         res["seconds"]["conversion"] = time.perf_counter() - t
     for key, fn in (("commonroad", lambda: _write_commonroad(scenario, job["commonroad"])),
                     ("lanelet2", lambda: _lanelet2(scenario, job["lanelet2"], job.get("routing"))),
+                    ("lanelet2_shared_nodes", lambda: _shared_nodes(scenario, job)),
                     ("verifier", lambda: _verify(scenario.lanelet_network,
                                                  job.get("verify_exclude", ()))),
                     ("attribution", lambda: _attribute(job["xodr"], scenario.lanelet_network))):

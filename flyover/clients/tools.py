@@ -120,9 +120,12 @@ def run_clients(jobs: Iterable[Mapping], python: Path | None = None,
     """Run the clients on each job in one process of their environment.
 
     A job is ``{"xodr": path, "commonroad": path|None, "lanelet2": path|None,
-    "verify": bool, "routing": bool, "pyopendrive": bool, "pyxodr": bool}``;
-    the answer per job holds one entry per client run (``ok``, its figures or
-    ``error``/``where``) and ``seconds`` per client.
+    "lanelet2_shared_nodes": path|None, "verify": bool, "routing": bool,
+    "pyopendrive": bool, "pyxodr": bool}``; ``lanelet2_shared_nodes`` writes the Lanelet2
+    map again with the converter's nodes shared by position (a point where two
+    lanelets from different predecessors meet is one node: the driver's
+    ``_nodes_shared_by_position``). The answer per job holds one entry per client run
+    (``ok``, its figures or ``error``/``where``) and ``seconds`` per client.
     """
     jobs = [{k: (str(v) if isinstance(v, os.PathLike) else v) for k, v in j.items()} for j in jobs]
     py = python or find_clients_python()
