@@ -40,16 +40,30 @@ def _point(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     return (1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t ** 2 * p[2] + t ** 3 * p[3]
 
 
-def bezier_length(p: np.ndarray, t0: float = 0.0, t1: float = 1.0) -> float:
-    """Arc length of a cubic Bézier between parameters ``t0`` and ``t1``.
+def _gl_length(b, c, d, t0: float, t1: float, intervals: int) -> float:
+    """Composite 8-point Gauss-Legendre arc length of the speed ``|b + 2ct + 3dt²|``."""
+    edges = np.linspace(t0, t1, intervals + 1)
+    half = 0.5 * (edges[1:] - edges[:-1])
+    t = (0.5 * (edges[1:] + edges[:-1]))[:, None] + half[:, None] * _GL_X
+    v = b + t[..., None] * (2 * c + 3 * t[..., None] * d)
+    return float((np.hypot(v[..., 0], v[..., 1]) @ _GL_W) @ half)
 
-    Adaptive quadrature (the speed may come close to zero on tight pieces,
-    where fixed-order rules lose millimetres); better than 1e-6 m.
+
+def bezier_length(p: np.ndarray, t0: float = 0.0, t1: float = 1.0) -> float:
+    """Arc length of a cubic Bézier between parameters ``t0`` and ``t1``; better than
+    1e-9 m.
+
+    Composite Gauss-Legendre rules of 16 and 32 intervals; where they differ by more than
+    1e-10 m (the speed comes close to zero on a tight piece, where fixed-order rules lose
+    millimetres) adaptive quadrature instead.
     """
     p = np.asarray(p, dtype=float)
     b = 3 * (p[1] - p[0])
     c = 3 * (p[0] - 2 * p[1] + p[2])
     d = -p[0] + 3 * p[1] - 3 * p[2] + p[3]
+    coarse, fine = _gl_length(b, c, d, t0, t1, 16), _gl_length(b, c, d, t0, t1, 32)
+    if abs(fine - coarse) <= 1e-10:
+        return fine
 
     def speed(t: float) -> float:
         v = b + t * (2 * c + 3 * t * d)
