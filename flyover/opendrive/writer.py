@@ -12,7 +12,8 @@ Model
   lanes as auxiliary lanes that open from zero width (a deceleration lane),
   on the side of the exit (left ones through ``laneOffset``). A merge
   (``In-R``/``In-L``) is the mirror image with an acceleration lane that
-  closes to zero width after the junction.
+  closes to zero width after the junction. The lanes of a two-lane ramp open
+  (close) one at a time, each over its own taper, never together at one point.
 * ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
   a direct road link; lane counts and widths change smoothly on the ramp.
 * Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
