@@ -301,3 +301,65 @@ def test_straight_on_branch_of_a_fork_changes_lane_width_over_a_taper_not_the_ju
     assert max(drift) < 0.004
     end = body.lane_t(-1, 100.0)
     assert abs(end[0] - end[1]) == pytest.approx(g.ramp_lane_width_m)
+
+
+def _lanes_ending_together(xodr: bytes) -> list[tuple]:
+    """(road, section s, 'close'|'open', lane ids): lane sections where two driving lanes or
+    more close to (open from) zero width together."""
+    def width(recs, ds):
+        s, a, b, c, d = [r for r in recs if r[0] <= ds + 1e-9][-1]
+        t = ds - s
+        return a + b * t + c * t * t + d * t ** 3
+
+    out = []
+    for road in etree.parse(io.BytesIO(xodr)).getroot().iter("road"):
+        secs = road.findall("lanes/laneSection")
+        for i, sec in enumerate(secs):
+            s0 = float(sec.get("s"))
+            s1 = float(secs[i + 1].get("s")) if i + 1 < len(secs) else float(road.get("length"))
+            ends = {"close": [], "open": []}
+            for lane in sec.findall("right/lane"):
+                if lane.get("type") != "driving":
+                    continue
+                recs = [tuple(float(w.get(k)) for k in ("sOffset", "a", "b", "c", "d"))
+                        for w in lane.findall("width")]
+                w0, w1 = width(recs, 0.0), width(recs, s1 - s0)
+                if w0 > 1e-6 and w1 < 1e-6:
+                    ends["close"].append(lane.get("id"))
+                if w0 < 1e-6 and w1 > 1e-6:
+                    ends["open"].append(lane.get("id"))
+            out += [(road.get("id"), s0, kind, ids) for kind, ids in ends.items() if len(ids) > 1]
+    return out
+
+
+def test_two_deceleration_lanes_open_one_after_the_other_each_over_its_own_taper():
+    """A two-lane exit (the fork sample's r1 leaves A1 at s=200) adds two lanes: the inner
+    one opens first, the outer one after a full-width stretch, never both over one taper
+    (successive lane drops are separated; ending together, two lanes also meet CommonRoad's
+    verifier as one point, which it reads as parallel, not merging)."""
+    opts = ExportOptions()
+    data = xodr_bytes(sample_geometry("fork"), opts)
+    assert _lanes_ending_together(data) == []
+    a1 = next(r for r in etree.parse(io.BytesIO(data)).getroot().iter("road")
+              if r.get("name") == "A1")
+    secs = [(float(s.get("s")), [ln.get("id") for ln in s.findall("right/lane")])
+            for s in a1.findall("lanes/laneSection")]
+    counts = [len(ids) for _, ids in secs]
+    # 2 lanes + shoulder; the inner opens (4 lanes), full width beside it, the outer opens
+    # (5), both full width to the diverge
+    assert counts == [3, 4, 4, 5, 5]
+    taper_inner, gap, taper_outer = (secs[i + 1][0] - secs[i][0] for i in (1, 2, 3))
+    assert taper_inner == pytest.approx(taper_outer)
+    # 200 m of road for 2 tapers, the spacing and the deceleration length: in proportion
+    f = min(1.0, 0.8 * 200.0 / (2 * opts.taper_length_m + opts.lane_drop_spacing_m
+                                + opts.decel_length_m))
+    assert taper_inner == pytest.approx(opts.taper_length_m * f)
+    assert gap == pytest.approx(opts.lane_drop_spacing_m * f)
+
+
+def test_two_acceleration_lanes_close_one_after_the_other_on_stack4():
+    """stack4's two-lane ramps merge on both carriageways: no two lanes end together
+    anywhere (they did on 8 roads per feature set, e.g. road 10, A2)."""
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    assert _lanes_ending_together(xodr_bytes(catalog_geometry("stack4", 0))) == []

@@ -12,7 +12,8 @@ Model
   lanes as auxiliary lanes that open from zero width (a deceleration lane),
   on the side of the exit (left ones through ``laneOffset``). A merge
   (``In-R``/``In-L``) is the mirror image with an acceleration lane that
-  closes to zero width after the junction.
+  closes to zero width after the junction. The lanes of a two-lane ramp open
+  (close) one at a time, each over its own taper, never together at one point.
 * ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
   a direct road link; lane counts and widths change smoothly on the ramp.
 * Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
@@ -72,6 +73,12 @@ class ExportOptions:
         taper; shortened in proportion where the parent piece has no room.
         Without them a lane-changing vehicle had ~70 m (mostly taper) to reach
         or leave the ramp's lane, and SUMO jammed at every loop.
+    lane_drop_spacing_m
+        Where an auxiliary region has several lanes (a two-lane ramp), they close
+        (open) one at a time, each over its own ``taper_length_m``, with this much
+        full width between one taper's end and the next one's start: the
+        outermost lane first after a merge, the innermost first before a diverge.
+        Shortened in proportion with the other lengths where the piece has no room.
     weave_max_m
         A merge followed on the same side by a diverge, with as many ramp
         lanes, at most this far apart (the parent piece between the two
@@ -89,6 +96,7 @@ class ExportOptions:
     snap_tol_m: float = 0.5
     decel_length_m: float = 120.0
     accel_length_m: float = 200.0
+    lane_drop_spacing_m: float = 80.0
     weave_max_m: float = 800.0
     opendrive_minor: int = 8
 
@@ -509,36 +517,52 @@ def _weaves(piece: _Piece, L: float, opts: ExportOptions) -> bool:
             and L <= opts.weave_max_m)
 
 
+def _aux_count(region: tuple | None) -> int:
+    """Auxiliary lanes a region closes (opens) one after the other: 0 if it is no auxiliary region."""
+    return region[2] if region is not None and region[0] == "aux" else 0
+
+
 def _region_lengths(piece: _Piece, L: float, opts: ExportOptions
-                    ) -> tuple[float, float, float, float, bool]:
-    """``(T0, T1, P0, P1, weave)``: taper and full-width lengths of a normal piece's regions.
+                    ) -> tuple[float, float, float, float, float, bool]:
+    """``(T0, T1, P0, P1, G, weave)``: taper, full-width and spacing lengths of a normal piece.
 
     An auxiliary lane runs full width for ``accel_length_m`` after a merge (start region)
     and ``decel_length_m`` before a diverge (end region), beside its taper; a width
-    transition has the taper alone. Where the piece is shorter than what its regions ask
-    for, every length shrinks in the same proportion (without full-width parts this is
-    the former ``min(taper, L / regions)``).
+    transition has the taper alone. A region of ``k`` auxiliary lanes has ``k`` tapers
+    ``G`` = ``lane_drop_spacing_m`` apart (each lane closes, or opens, over its own).
+    Where the piece is shorter than what its regions ask for, every length shrinks in
+    the same proportion (without full-width parts this is the former
+    ``min(taper, L / regions)``).
     """
     r0, r1 = piece.start_region, piece.end_region
     if _weaves(piece, L, opts):
-        return 0.0, 0.0, 0.0, 0.0, True
-    T = opts.taper_length_m
+        return 0.0, 0.0, 0.0, 0.0, 0.0, True
+    T, G = opts.taper_length_m, opts.lane_drop_spacing_m
     T0, T1 = (T if r0 else 0.0), (T if r1 else 0.0)
     P0 = opts.accel_length_m if r0 is not None and r0[0] == "aux" else 0.0
     P1 = opts.decel_length_m if r1 is not None and r1[0] == "aux" else 0.0
-    want = T0 + T1 + P0 + P1
+    k0, k1 = max(1, _aux_count(r0)), max(1, _aux_count(r1))
+    want = k0 * T0 + k1 * T1 + P0 + P1 + ((k0 - 1) + (k1 - 1)) * G
     # full lengths where they fit with a plain stretch beside them; else in proportion
     f = min(1.0, L / want, _FILL * L / want if P0 or P1 else 1.0) if want > 0 else 1.0
-    return T0 * f, T1 * f, P0 * f, P1 * f, False
+    return T0 * f, T1 * f, P0 * f, P1 * f, G * f, False
+
+
+def _region_span(region: tuple | None, T: float, P: float, G: float) -> float:
+    """Length a region's lane sections take: its full-width part, tapers and the spacing between."""
+    if region is None:
+        return 0.0
+    k = max(1, _aux_count(region))
+    return P + k * T + (k - 1) * G
 
 
 def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
-                  P0: float = 0.0, P1: float = 0.0, weave: bool = False):
+                  P0: float = 0.0, P1: float = 0.0, weave: bool = False, G: float = 0.0):
     """Lane sections of a normal piece: list of (s, laneOffset cubic, [(key, width cubic)]).
 
-    A region's auxiliary lane runs full width for ``P0`` (after the start) or ``P1``
-    (before the end) beside its taper ``T0``/``T1``; ``weave``: one full-width
-    auxiliary lane over the whole piece.
+    A region's auxiliary lanes run full width for ``P0`` (after the start) or ``P1``
+    (before the end) beside their tapers ``T0``/``T1``, one taper per lane, ``G`` apart;
+    ``weave``: one full-width auxiliary lane over the whole piece.
     """
     L = piece.s1 - piece.s0
     base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
@@ -548,32 +572,75 @@ def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
     secs = []
     P0 = P0 if r0 else 0.0
     P1 = P1 if r1 else 0.0
-    s_plain0, s_plain1 = (P0 + T0 if r0 else 0.0), (L - T1 - P1 if r1 else L)
+    s_plain0, s_plain1 = _region_span(r0, T0, P0, G), L - _region_span(r1, T1, P1, G)
     if r0:
-        if P0 > 1e-6:
-            secs.append((0.0, _region_lanes(el, r0, P0, opening=False, sh=sh, full=True)))
-        secs.append((P0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
+        if r0[0] == "aux":
+            secs += _aux_sections(el, r0, 0.0, T0, P0, G, opening=False, sh=sh)
+        else:
+            secs.append((0.0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
     if s_plain1 - s_plain0 > 1e-6 or not (r0 or r1):
         secs.append((s_plain0, (_const(0.0), base + [(("sh",), _const(sh))])))
     if r1:
-        secs.append((L - T1 - P1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
-        if P1 > 1e-6:
-            secs.append((L - P1, _region_lanes(el, r1, P1, opening=True, sh=sh, full=True)))
+        if r1[0] == "aux":
+            secs += _aux_sections(el, r1, s_plain1, T1, P1, G, opening=True, sh=sh)
+        else:
+            secs.append((s_plain1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
     return secs
+
+
+def _aux_sections(el: _Element, region: tuple, s0: float, T: float, P: float, G: float,
+                  opening: bool, sh: float) -> list:
+    """Lane sections of an auxiliary region from ``s0``: its lanes close (open) one at a time.
+
+    After a merge (``opening=False``) every lane runs full width for ``P``, then the
+    outermost closes over ``T``, the others keep their width for ``G``, the next
+    closes, and so on; before a diverge (``opening=True``) the mirror image, the
+    innermost opening first. Successive lane drops are separated, never at one point
+    (two lanes ending together also read to CommonRoad's verifier as one place).
+
+    >>> el = _Element("A1", "road", 2, 3.5, 500.0)
+    >>> secs = _aux_sections(el, ("aux", "R", 2, 4.0), 0.0, 80.0, 200.0, 80.0, False, 3.0)
+    >>> [(s, [k for k, _ in lanes if k[0] == "aux"]) for s, (_, lanes) in secs]
+    [(0.0, [('aux', 1), ('aux', 2)]), (200.0, [('aux', 1), ('aux', 2)]), (280.0, [('aux', 1)]), (360.0, [('aux', 1)])]
+    """
+    _, side, k, w = region
+    outer_first = list(range(k, 0, -1)) if side == "R" else list(range(1, k + 1))
+    order = outer_first if not opening else outer_first[::-1]
+    steps: list[dict[int, Cubic]] = []  # per section: aux lane -> width
+    live = set(range(1, k + 1)) if not opening else set()
+    if P > 1e-6 and not opening:
+        steps.append(("P", {j: _const(w) for j in live}))
+    for n, j in enumerate(order):
+        cub = _rising(w, T) if opening else _change(w, 0.0, T)
+        steps.append(("T", {**{i: _const(w) for i in live if i != j}, j: cub}))
+        live = live | {j} if opening else live - {j}
+        if n < k - 1 and G > 1e-6:
+            steps.append(("G", {i: _const(w) for i in live}))
+    if P > 1e-6 and opening:
+        steps.append(("P", {j: _const(w) for j in live}))
+    secs, s = [], s0
+    for kind, widths in steps:
+        secs.append((s, _aux_lanes(el, side, widths, sh)))
+        s += {"P": P, "T": T, "G": G}[kind]
+    return secs
+
+
+def _aux_lanes(el: _Element, side: str, widths: dict[int, Cubic], sh: float):
+    """``(laneOffset, lanes)`` of a section with auxiliary lanes ``widths`` beside the carriageway."""
+    aux = [(("aux", j), widths[j]) for j in sorted(widths)]
+    base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
+    if side == "R":
+        return _const(0.0), base + aux + [(("sh",), _const(sh))]
+    off = Cubic(0.0, *(sum(getattr(c, a) for c in widths.values()) for a in "abcd"))
+    return off, aux + base + [(("sh",), _const(sh))]
 
 
 def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: float,
                   full: bool = False):
     kind = region[0]
-    if kind == "aux":
+    if kind == "aux":  # the full-width lanes of a weave (tapers: _aux_sections)
         _, side, k, w = region
-        cub = _const(w) if full else (_rising(w, T) if opening else _change(w, 0.0, T))
-        aux = [(("aux", j), cub) for j in range(1, k + 1)]
-        base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
-        if side == "R":
-            return _const(0.0), base + aux + [(("sh",), _const(sh))]
-        off = Cubic(0.0, cub.a * k, cub.b * k, cub.c * k, cub.d * k)
-        return off, aux + base + [(("sh",), _const(sh))]
+        return _aux_lanes(el, side, {j: _const(w) for j in range(1, k + 1)}, sh)
     # width transition toward/from a carriageway of n lanes of width w (Out-M / In-M);
     # "drop": only its lanes beyond the ramp's close (open), the ramp's keep width w
     kind, n, w = region
@@ -665,8 +732,8 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
                                                           for i in range(1, el.lanes + 1)]
                                              + [(("sh",), _const(sh))]))]
                 continue
-            T0, T1, P0, P1, weave = _region_lengths(p, L, opts)
-            layouts[p.road_id] = _lanes_layout(el, p, T0, T1, sh, P0, P1, weave)
+            T0, T1, P0, P1, G, weave = _region_lengths(p, L, opts)
+            layouts[p.road_id] = _lanes_layout(el, p, T0, T1, sh, P0, P1, weave, G)
 
     def ids(rid_: int, which: int) -> dict[tuple, int]:
         secs = layouts[rid_]
