@@ -50,6 +50,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from flyover.config import load_config  # noqa: E402
+from flyover.errors import FlyoverError  # noqa: E402
 from flyover.geometry._kernels import HOLD_M  # noqa: E402
 from flyover.geometry.bezier import sample_spline  # noqa: E402
 from flyover.geometry.dubins import shortest  # noqa: E402
@@ -139,9 +140,17 @@ def _build(job: tuple[str, int]) -> tuple:
     name, topo, sets, seed, settings, keep = _WORK[cid]
     t0 = time.process_time()
     own = sample_seed(seed, cid, sample)
-    ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
-                      settings=settings, resampler=domain_resampler(sets, own))
+    where = str(topo.source or name)
+    try:
+        ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
+                          settings=settings, resampler=domain_resampler(sets, own))
+    except FlyoverError as exc:  # one interchange that cannot be built: its line, not a crash
+        return name, sample, time.process_time() - t0, exc.located(where).one_line()
     secs = time.process_time() - t0
+    try:
+        xodr = remeasure(ic.geometry)  # exported and read back
+    except FlyoverError as exc:
+        return name, sample, secs, "export: " + exc.located(where).one_line()
     rebuilt = ic.geometry.seed != own  # kept a build with another seed (geometry.rebuilds)
     if keep:
         out = keep / cid / str(sample)
@@ -160,7 +169,6 @@ def _build(job: tuple[str, int]) -> tuple:
     for r in rows:
         r["stretch"] = stretch[r["ramp"]]
         r["detour"] = detour[r["ramp"]]
-    xodr = remeasure(ic.geometry)
     for r in rows:
         r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
             xodr.get(r["ramp"], (math.nan,) * 4)
@@ -496,7 +504,13 @@ def main() -> None:
     jumps: dict[str, list[float]] = {}
     rounded: dict[str, list[bool]] = {}
     round_misses: list[tuple] = []
-    for name, sample, secs, ic_rows, ic_fits, dense, again, bridges, box, jump, rnd in done:
+    failed = []
+    for name, sample, secs, *built in done:
+        if len(built) == 1:
+            failed.append(f"{name} sample {sample}: NOT BUILT ({secs:.2f} s): {built[0]}")
+            print(failed[-1], flush=True)
+            continue
+        ic_rows, ic_fits, dense, again, bridges, box, jump, rnd = built
         rounded.setdefault(name, []).extend(r[0] for r in rnd)
         round_misses += [(name, sample, *r[1:]) for r in rnd if not r[0]]
         jumps.setdefault(name, []).extend(jump)
@@ -517,6 +531,9 @@ def main() -> None:
               f"{len(ic_fits)} ramps ok, {secs:.2f} s", flush=True)
     if pool is not None:
         pool.close()
+    if not rows:
+        print(f"no interchange built; not built or not exported: {len(failed)}")
+        return
     print("\nclass (design)                 ramps  first-try-ok  resampled  ok  infeasible  conflict")
     tot = dict(ramps=0, first_try_ok=0, resampled=0, ok=0, infeasible=0, conflicts=0)
     for s in summary(rows):
@@ -531,6 +548,9 @@ def main() -> None:
           f"{100 * sum(r['ok'] or bool(r['infeasible']) for r in rows) / len(rows):.1f} %")
     print(f"interchanges with a same-level conflict, dense check (lane centres <= 1 m apart, "
           f"flyover.geometry.check): {sum(dense_bad.values())} of {len(per_ic)} {dense_bad or ''}")
+    print(f"interchanges not built or not exported: {len(failed)} of {len(per_ic) + len(failed)}")
+    for line in failed:
+        print(f"  {line}")
     print(f"interchanges kept from a rebuild with other seeds (a ramp met something at its "
           f"level): {sum(rebuilt.values())} of {len(per_ic)} {rebuilt or ''}")
     ramp_s = np.array([r["seconds"] for r in rows])  # all DE runs of the ramp

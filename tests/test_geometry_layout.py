@@ -627,3 +627,70 @@ def test_collector_distributor_roads_run_beside_their_carriageway():
         assert np.allclose(lateral[middle], -4 * st.lane_width_m - st.cd_offset_m, atol=1e-6)
         assert abs(r.min_radius_m - 40.0) < 0.05 * 40.0
         assert r.length_m < (along.max() - along.min()) * 1.01
+
+
+def _five_leg():
+    """A through expressway A and two that end here, B and C (half lines, as a real
+    5-leg interchange's): B1 and C1 begin here, B2 and C2 end here; x leaves B1 and y
+    joins it beside the T terminals (B1 has no part before the crossing)."""
+    c = Connection
+    return Topology.build(
+        "five_leg", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2")],
+        [Ramp(x) for x in "pqrsxy"],
+        [c("A1", "p", Label.OUT_R, 0.3), c("p", "B1", Label.IN_M),
+         c("B2", "q", Label.OUT_M), c("q", "A2", Label.IN_R, 0.7),
+         c("A2", "r", Label.OUT_R, 0.3), c("r", "C1", Label.IN_M),
+         c("C2", "s", Label.OUT_M), c("s", "A1", Label.IN_R, 0.7),
+         c("B1", "x", Label.OUT_R, 0.3), c("x", "C1", Label.IN_R, 0.6),
+         c("C2", "y", Label.OUT_R, 0.3), c("y", "B1", Label.IN_R, 0.7)])
+
+
+def test_expressways_ending_here_each_get_their_own_direction_above_the_through_one():
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    roads = layout_roads(_five_leg(), {}, LayoutSettings())
+    legs = []  # the directions from the centre in which each expressway's carriageways run
+    for e in "ABC":
+        r = roads[f"{e}1"]
+        d = [r.heading] if np.isfinite(r.t_lo) else [r.heading + np.pi]
+        legs += d if e != "A" else [r.heading, r.heading + np.pi]
+    gaps = [abs((a - b + np.pi) % (2 * np.pi) - np.pi) for i, a in enumerate(legs)
+            for b in legs[i + 1:]]
+    assert min(gaps) > np.pi / 8, np.degrees(legs)
+    assert {roads[r].level for r in ("A1", "A2")} == {0}
+    assert {roads[r].level for r in ("B1", "B2", "C1", "C2")} == {1}
+
+
+def test_attachment_windows_stay_on_carriageways_that_begin_or_end_here():
+    from flyover.geometry.chains import ends  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    t = _five_leg()
+    feats = {r: RampFeatures(150.0, 5.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, LayoutSettings(), 0)
+    for ramp in t.ramps:
+        for end, is_start in zip(ends(t, ramp), (True, False)):
+            if end is None or end[0] not in b.roads:
+                continue
+            road = b.roads[end[0]]
+            rail = b.windows.rail(ramp, feats[ramp], end, is_start, b.moves.is_loop(ramp), 4.0)
+            assert road.t_lo - 1e-6 <= rail.lo <= rail.hi <= road.t_hi + 1e-3, (ramp, end)
+    # x leaves B1, which begins here: after its start, not before the crossing
+    x = b.windows.rail("x", feats["x"], ends(t, "x")[0], True, False, 4.0)
+    assert x.lo > b.roads["B1"].t_lo
+
+
+def test_a_five_leg_interchange_builds_and_exports_with_attachments_on_their_roads():
+    from flyover.opendrive.writer import xodr_bytes  # noqa: PLC0415
+
+    t = _five_leg()
+    ic = build_interchange(t, {}, {r: RampFeatures(150.0, 5.0) for r in t.ramps},
+                           class_id="c0", sample=0, seed=1)
+    g = ic.geometry
+    for ramp in g.ramps:
+        for att in (ramp.start, ramp.end):
+            if att.parent in {r.id for r in g.roads}:
+                assert -0.01 <= att.s_m <= g.road(att.parent).length_m + 0.01, ramp.id
+    assert not same_level_conflicts(g)
+    assert all(o.fit.ok or o.infeasible for o in ic.outcomes)
+    assert b"<road " in xodr_bytes(g)

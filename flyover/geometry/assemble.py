@@ -2,7 +2,8 @@
 
 Decides each road's extent (every attachment and ramp covered, with
 ``road_margin_m``) and each ramp's attachment stations measured from its road's
-start; reads the layout state and the build loop's outcomes.
+start (an attachment off its road is a :class:`GeometryError`); reads the layout
+state and the build loop's outcomes.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 
 from flyover.geometry.chains import wrap as _wrap
 from flyover.geometry.model import Attachment, InterchangeGeometry, RampGeometry, RoadGeometry
+from flyover.geometry.settings import GeometryError
 
 if TYPE_CHECKING:
     from flyover.geometry.build import RampOutcome
@@ -36,11 +38,12 @@ def assemble(b: "LayoutState", class_id: str, sample: int, seed: int,
     extent = max([abs(t) for v in ts.values() for t in v] or [st.reach_m / 3])
     extent += st.road_margin_m
     t0: dict[str, float] = {}
+    length: dict[str, float] = {}
     roads = []
     for r in sorted(b.roads.values(), key=lambda r: r.id):
         lo = r.t_lo if np.isfinite(r.t_lo) else -extent
         hi = r.t_hi if np.isfinite(r.t_hi) else extent
-        t0[r.id] = lo
+        t0[r.id], length[r.id] = lo, hi - lo
         start = np.array(r.origin) + lo * np.array([math.cos(r.heading), math.sin(r.heading)])
         roads.append(RoadGeometry(r.id, r.expressway, r.lanes, r.level, r.z,
                                   (float(start[0]), float(start[1])), r.heading, float(hi - lo)))
@@ -54,6 +57,10 @@ def assemble(b: "LayoutState", class_id: str, sample: int, seed: int,
                 atts.append(Attachment("", "", 0.0, 0.0, _wrap(pose[2]), pose[3]))
                 continue
             s_m = s - t0[rail.parent] if rail.parent in b.roads else s
+            if rail.parent in b.roads and not -0.01 <= s_m <= length[rail.parent] + 0.01:
+                raise GeometryError(f"attachment at s={s_m:.2f} m is off {rail.parent} "
+                                    f"(0..{length[rail.parent]:.2f} m)",
+                                    source=b.topo.source, element=o.ramp)
             atts.append(Attachment(rail.parent, rail.label, float(s_m), float(rail.offset_m),
                                    float(_wrap(pose[2])), float(pose[3])))
         ramps.append(RampGeometry(

@@ -175,6 +175,8 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             first.setdefault(o.ramp, o.first_try_ok)
         rank = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
                 sum(o.fit.conflicts for o in ic.outcomes), sum(not o.fit.ok for o in ic.outcomes))
+        log.debug("%s sample %s build %d (seed %d): %d ramps meeting something at their "
+                  "level (%d samples), %d missing targets", class_id, sample, k, ks, *rank)
         if best is None or rank < best[0]:
             best = (rank, ic)
         if rank[0] == 0:

@@ -95,8 +95,14 @@ class AttachmentWindows:
                 reach = tz + st.stub_window_m
             elif bound is not None:  # no farther out than the ramp needs
                 reach = max(tz + st.gap_m, min(reach, tz + bound))
+            if before and r.t_lo > -tz:  # the road begins here: everything is after
+                before = False
+            elif not before and r.t_hi < tz:  # it ends here: everything is before
+                before = True
             lo, hi = (-reach, -tz) if before else (tz, reach)
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
+            if lo > hi - 1.0:  # a half line begins (ends) beyond the room: as far again
+                lo, hi = (hi - (reach - tz), hi) if before else (lo, lo + reach - tz)
             if pos is not None:
                 for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
                     round_loop = moves.goes_round_loop(ramp, other, road)
@@ -115,6 +121,9 @@ class AttachmentWindows:
                             hi = min(hi, self.round_loop(other, road, width, -1, feat))
             if lo > hi - 1.0:  # no room left between the others: keep the side's order
                 lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
+            # never beyond the carriageway's ends (a half line's, a T's terminal)
+            lo = float(np.clip(lo, r.t_lo + st.gap_m, r.t_hi - st.gap_m))
+            hi = float(np.clip(hi, r.t_lo + st.gap_m, r.t_hi - st.gap_m))
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)

@@ -8,11 +8,14 @@ settings.
   expressway runs north–south (carriageway 1 northbound), the second east–west;
   its direction is chosen so that as many ramps as possible leave and join on
   the side they turn to (right exits turning right). Further expressways are
-  placed at 45° steps. An expressway that ends here (``Out-M``/``In-M``, a T)
-  is a half line: its carriageways end/begin ``terminal_m`` from the centre on
-  the side the topology implies (farther by ``terminal_extra``: far enough for
-  a ramp to climb one level there). Each expressway is on its own level
-  (0, 1, ...), the terminating one of a T above the through one.
+  placed at 45° steps, each where its legs are farthest from those placed
+  (a 5-leg interchange's half lines spread round the centre). An expressway
+  that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
+  end/begin ``terminal_m`` from the centre on the side the topology implies
+  (farther by ``terminal_extra``: far enough for a ramp to climb one level
+  there). Each through expressway is on its own level (0, 1, ...); the
+  terminating ones, which never meet, share the level above them (a T's
+  terminating expressway above the through one).
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
   from the axis; where ramps leave or join a carriageway on its left (they run
   in the median) the median is wider by two ramp lanes and shoulders.
@@ -64,9 +67,15 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     half = {e: median[e] / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
             + st.shoulder_width_m for e, rs in exps.items()}
 
+    # each through expressway on its own level; the terminating ones (half lines in
+    # directions of their own: they never meet) on the one above them all
+    n_through = sum(not term_of[e] for e in exps)
+    level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
+
     def place(options: dict[str, float]) -> dict[str, RoadLine]:
         roads = {}
-        for k, e in enumerate(order):
+        for e in order:
+            k = level[e]
             rs = exps[e]
             h1 = options[e]
             for i, r in enumerate(rs):
@@ -85,14 +94,33 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
                                     half[e])
         return roads
 
-    base = {e: np.pi / 2 - k * np.pi / 2 if k < 2 else np.pi / 2 - k * np.pi / 4
-            for k, e in enumerate(order)}
+    def legs(e: str, h: float) -> list[float]:
+        """The directions from the centre in which expressway ``e`` (heading ``h``) runs:
+        both for a through one, one for a T's terminating one (a half line)."""
+        if not term_of[e]:
+            return [h, h + np.pi]
+        return [h if terminal(topo, exps[e][0]) == "start" else h + np.pi]
+
+    def spread(opts: dict[str, float]) -> dict[str, float]:
+        """Headings of the third and further expressways, at 45° steps: each where its
+        legs are farthest from those already placed (a half line needs one free
+        direction, a through expressway two opposite ones)."""
+        taken = [a for e in order[:2] for a in legs(e, opts[e])]
+        for e in order[2:]:
+            cands = [np.pi / 2 - j * np.pi / 4 for j in range(8)]
+            gap = [min((abs(wrap(a - b)) for a in legs(e, h) for b in taken), default=np.pi)
+                   for h in cands]
+            opts[e] = cands[int(np.argmax(gap))]
+            taken += legs(e, opts[e])
+        return opts
+
+    base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(order[:2])}
     best, best_score = None, -1e9
     for flip in ([False, True] if len(order) > 1 else [False]):
         opts = dict(base)
         if flip:
             opts[order[1]] += np.pi
-        roads = place(opts)
+        roads = place(spread(opts))
         score = 0
         for ramp in topo.ramps:
             a = road_of(topo, ramp, False)

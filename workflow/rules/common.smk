@@ -129,7 +129,9 @@ def class_tables(stage):
 # 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
 #     (length_margin), inf resampled only where sampling allows it
 # 14: a ramp attached to a ramp attaches where its parent is level (no grade jump), if it can
-GEOMETRY_VERSION = 14
+# 15: expressways ending here (half lines) spread round the centre, on the level above the
+#     through ones; windows stay on carriageways that begin or end here (catalog unchanged)
+GEOMETRY_VERSION = 15
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
