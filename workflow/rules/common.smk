@@ -15,7 +15,7 @@ validate_config(config, "config/config.yaml")
 TOPOLOGY_VERSION = 5  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader; 5: OSM connectors between roads, ref-less carriageways paired by name, 3+ motorway link groups one interchange, direct ramps with geometry, self-check legs by carriageway pairs
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 8  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout; 6: connecting roads taper over 2/3 of the section (CommonRoad); 7: a straight-on branch of a fork or join changes its lane width over a taper on its body, not the connecting road; 8: paramPoly3 records cut so that road position s is within 5 cm of arc length (heights were up to 356 m from their place)
-VALIDATION_VERSION = 4  # 4: one job per class, the SUMO network of the export stage
+VALIDATION_VERSION = 5  # 4: one job per class, the SUMO network of the export stage; 5: clearance compares a ramp with itself (a loop over its own lane)
 CLIENTS_SAMPLE_VERSION = 2  # 1: CommonRoad's map verifier on one seeded interchange; 2: among the smallest tenth
 
 
@@ -129,7 +129,8 @@ def class_tables(stage):
 # 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
 #     (length_margin), inf resampled only where sampling allows it
 # 14: a ramp attached to a ramp attaches where its parent is level (no grade jump), if it can
-GEOMETRY_VERSION = 14
+# 15: a ramp turning over 162 degrees (loops) counts where it meets itself as conflicts
+GEOMETRY_VERSION = 15
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
