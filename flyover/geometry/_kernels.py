@@ -17,9 +17,9 @@ points (which lie at most :data:`STEP_M` apart), so that a crossing cannot slip
 between samples. Only the inner points count (``end_zone`` from
 either end, where a ramp leaves or joins its parent, is exempt).
 
-A ramp that turns far enough to cross itself (intended turn over
-:data:`SELF_TURN_RAD`: loops) is also tested against its own lane centre
-(:func:`self_conflicts`), stretch against stretch.
+A candidate whose heading spans far enough for it to cross itself (over
+:data:`SELF_TURN_RAD`: loops, and curves that loop and turn back) is also tested
+against its own lane centre (:func:`self_conflicts`), stretch against stretch.
 """
 
 from __future__ import annotations
@@ -243,12 +243,12 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
     return out, depth
 
 
-#: a ramp whose intended turn is larger than this (rad) is tested against itself too
-#: (:func:`self_conflicts`): between two points where a smooth curve crosses itself it
-#: turns by at least half a turn (the loop it closes: 2 pi less the crossing's angle), and a
-#: ramp is accepted only within 0.05 rad of its intended turn; 0.9 pi (162 degrees) leaves a
-#: margin for a curve that turns back a little, and keeps the test to loops (270 degrees
-#: and more) and U-turns: the ramps that can cross themselves
+#: a candidate whose lane centre's heading spans more than this (rad) is tested against
+#: itself (:func:`self_conflicts`): between two points where a curve crosses itself its
+#: heading turns by at least half a turn (the loop it closes: 2 pi less the crossing's
+#: angle); 0.9 pi leaves a margin for coming within the lane's width of itself short of
+#: crossing. Not the ramp's intended turn: a ramp turning 123 degrees net can loop
+#: over itself and turn back (catalog j1)
 SELF_TURN_RAD = 0.9 * np.pi
 #: stretches per block of :func:`self_conflicts` (blocks whose boxes are apart skip their pairs)
 _SELF_BLOCK = 8
@@ -291,8 +291,10 @@ def self_conflicts(cx, cy, s, z, length, end_zone, hw, clearance, gap):  # pragm
     closest points are within the two half widths ``2 hw`` in plan and less than
     ``clearance`` apart in height, both outside the end zones. Returns the count
     ``(P,)`` and depth (the least move clear, sideways or up/down, summed) ``(P,)``.
-    Stretches are grouped in blocks of :data:`_SELF_BLOCK`; two blocks whose boxes are
-    more than ``2 hw`` apart in plan, or a clearance apart in height, are skipped."""
+    Only candidates whose heading spans more than :data:`SELF_TURN_RAD` can meet
+    themselves (the others cost one pass over their samples). Stretches are grouped in
+    blocks of :data:`_SELF_BLOCK`; two blocks whose boxes are more than ``2 hw`` apart in
+    plan, or a clearance apart in height, are skipped."""
     p_count, n = cx.shape
     out = np.zeros(p_count, np.int64)
     depth = np.zeros(p_count)
@@ -304,6 +306,15 @@ def self_conflicts(cx, cy, s, z, length, end_zone, hw, clearance, gap):  # pragm
     by0, by1 = np.empty(nb), np.empty(nb)
     bz0, bz1 = np.empty(nb), np.empty(nb)
     for p in range(p_count):
+        # the span of the heading along the lane centre's stretches
+        h = h_lo = h_hi = 0.0
+        for i in range(2, n):
+            ux, uy = cx[p, i - 1] - cx[p, i - 2], cy[p, i - 1] - cy[p, i - 2]
+            vx, vy = cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1]
+            h += _step_angle(ux * vy - uy * vx, ux * vx + uy * vy)
+            h_lo, h_hi = min(h_lo, h), max(h_hi, h)
+        if h_hi - h_lo <= SELF_TURN_RAD:
+            continue
         hi_s = length[p] - end_zone
         for k in range(nb):
             i0 = 1 + k * _SELF_BLOCK

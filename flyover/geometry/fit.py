@@ -325,11 +325,16 @@ def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) 
     return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
 
 
-def _self_gap(spec: RampSpec) -> float:
+def _self_gap(spec: RampSpec, search: bool = False) -> float:
     """How far apart along itself (m) a ramp's stretches must be to meet as a crossing
-    (two widths: as :func:`flyover.geometry.check.same_level_conflicts`), or 0 for a ramp
-    that does not turn far enough to cross itself (:data:`_kernels.SELF_TURN_RAD`)."""
-    return 2.0 * float(spec.width_m) if abs(spec.turn_rad) > _kernels.SELF_TURN_RAD else 0.0
+    (two widths, as :func:`flyover.geometry.check.same_level_conflicts`; the kernel
+    tests only curves whose heading spans :data:`_kernels.SELF_TURN_RAD`). In the
+    ``search``, only for a ramp meant to turn that far (loops: 0 for the others, whose
+    searches stay as they were); a fitted ramp (:func:`recount`) is always tested, so one
+    that loops over itself and turns back counts its conflicts and is fitted again."""
+    if search and abs(spec.turn_rad) <= _kernels.SELF_TURN_RAD:
+        return 0.0
+    return 2.0 * float(spec.width_m)
 
 
 def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
@@ -374,7 +379,7 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     weights = (float(settings.conflict_weight), float(settings.depth_weight),
                float(settings.compact_weight))
     w = np.array(weights)
-    gap = _self_gap(spec)
+    gap = _self_gap(spec, search=True)
 
     def table(x: np.ndarray, bound: np.ndarray | None = None) -> np.ndarray:
         x = np.ascontiguousarray(x, float)

@@ -129,7 +129,7 @@ def class_tables(stage):
 # 13: radius held over 10 m (HOLD_M), attachment windows bounded by what a ramp needs
 #     (length_margin), inf resampled only where sampling allows it
 # 14: a ramp attached to a ramp attaches where its parent is level (no grade jump), if it can
-# 15: a ramp turning over 162 degrees (loops) counts where it meets itself as conflicts
+# 15: a ramp meeting itself at its level is a conflict (the search tests loops, the recount every ramp)
 GEOMETRY_VERSION = 15
 
 
