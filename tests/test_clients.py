@@ -72,13 +72,15 @@ def test_gore_shoulder_opens_from_zero_width_inside_the_junction(tmp_path):
 
 
 def test_a_road_over_itself_is_two_levels_a_clearance_apart_where_it_crosses(tmp_path):
-    # cloverleaf C-D's loop lA1 turns 343 degrees and its end passes under its own climb:
-    # the lanelet CommonRoad makes of it crosses itself in 2D (the verifier's self- and
-    # polylines intersections). Its lane borders from the .xodr: where they cross, the file
-    # has the loop at two heights 5.9 m apart (3.0 m before road positions were written
-    # within 5 cm of arc length), more than the pipeline's 5.5 m clearance.
+    # cloverleaf C-D's loop lA1 (feature set 1) turns 309 degrees and its outer border
+    # passes over its own start: the lanelet CommonRoad makes of it crosses itself in 2D
+    # (the verifier's self- and polylines intersections). Its lane borders from the .xodr:
+    # where they cross, the file has the loop at two heights 6.2 m apart, more than the
+    # pipeline's 5.5 m clearance. (Feature set 0's lA1 crossed itself 5.9 m apart, 3.0 m
+    # before road positions were written within 5 cm of arc length; since the search tests
+    # loops against themselves (GEOMETRY_VERSION 15) it does not cross itself.)
     import numpy as np
-    _, path = _write(tmp_path, "cloverleaf_cd")
+    _, path = _write(tmp_path, "cloverleaf_cd", 1)
     net = read_xodr(path)
     roads = [r for r in net.roads.values() if r.name == "lA1" and r.junction == "-1"]
     [loop] = roads

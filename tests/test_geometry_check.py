@@ -23,6 +23,35 @@ def _straight(id_, p0, p1, z=0.0, lanes=1):
         max_slope_pct=0.0, length_m=length)
 
 
+def _loop(id_, rise_m, radius=50.0, lead=200.0):
+    """A one-lane ramp east along y = 0 to (0, 0), 270 degrees left around (0, radius), then
+    south: it crosses its own lead-in at x = -radius, climbing ``rise_m`` in between."""
+    k = 4.0 / 3.0 * math.tan(math.pi / 8) * radius  # a quarter circle's Bézier handle
+    pieces = [BezierPiece(((-lead, 0.0), (-2 * lead / 3, 0.0), (-lead / 3, 0.0), (0.0, 0.0)),
+                          lead)]
+    p, h = (0.0, 0.0), 0.0
+    for _ in range(3):
+        c = (p[0] - radius * math.sin(h), p[1] + radius * math.cos(h))  # the centre
+        q = (c[0] + radius * math.sin(h + math.pi / 2), c[1] - radius * math.cos(h + math.pi / 2))
+        h2 = h + math.pi / 2
+        pieces.append(BezierPiece((p, (p[0] + k * math.cos(h), p[1] + k * math.sin(h)),
+                                   (q[0] - k * math.cos(h2), q[1] - k * math.sin(h2)), q),
+                                  radius * math.pi / 2))
+        p, h = q, h2
+    pieces.append(BezierPiece((p, (p[0], p[1] - lead / 3), (p[0], p[1] - 2 * lead / 3),
+                               (p[0], p[1] - lead)), lead))
+    length = sum(q.length_m for q in pieces)
+    apart = 1.5 * math.pi * radius + 2 * radius  # stations of the crossing, along the ramp
+    grade = rise_m / apart
+    return RampGeometry(
+        id=id_, lanes=1, plan=tuple(pieces),
+        elevation=(ElevationPoly(0.0, 0.0, grade, 0.0, 0.0),),
+        start=Attachment("", "", 0.0, 0.0, 0.0, 0.0),
+        end=Attachment("", "", 0.0, 0.0, -math.pi / 2, grade * length),
+        target_radius_m=radius, target_slope_pct=100 * grade, min_radius_m=radius,
+        max_slope_pct=100 * grade, length_m=length)
+
+
 def _geometry(*ramps, roads=()):
     return InterchangeGeometry("c0", 0, 1, levels_m=(0.0, 6.5), roads=roads, ramps=ramps)
 
@@ -62,6 +91,22 @@ def test_a_ramp_on_a_road_at_its_height_conflicts_and_names_the_road():
     assert same_level_conflicts(_geometry(up, roads=(road,))) == ()
 
 
+def test_a_loop_passing_under_itself_below_the_clearance_conflicts_with_itself():
+    (c,) = same_level_conflicts(_geometry(_loop("l", 3.5)))
+    assert (c.ramp, c.other) == ("l", "l")
+    # the lane centre (its half width right of the reference line: outside the loop)
+    # crosses its own lead-in at x = -52 (station 148), 3.5 m under the loop's last leg
+    assert c.s_m < 148.0 < c.s_m + c.length_m and c.length_m < 8.0
+    assert c.dz_m == pytest.approx(3.5, abs=0.2)
+
+
+def test_a_loop_clearing_itself_or_a_plain_curve_has_no_self_conflict():
+    assert same_level_conflicts(_geometry(_loop("l", 6.0))) == ()
+    # a tight curve's neighbouring stations are never a crossing (a level loop's are)
+    assert [c.other for c in same_level_conflicts(_geometry(_loop("l", 0.0, radius=15.0)))] \
+        == ["l"]
+
+
 def test_the_clearance_row_names_the_file_and_what_meets_what(tmp_path):
     from flyover.geometry.model import write_geometry
     from flyover.opendrive.pipeline import clearance_check
@@ -76,3 +121,8 @@ def test_the_clearance_row_names_the_file_and_what_meets_what(tmp_path):
                              _straight("b", (0.0, -200.0), (0.0, 200.0), z=6.5)), path)
     assert clearance_check(path).ok
     assert not clearance_check(path, clearance_m=7.0).ok
+    write_geometry(_geometry(_loop("l", 3.5)), path)
+    row = clearance_check(path)
+    assert not row.ok and row.detail.startswith(f"{path}: l meets l at s=1")
+    write_geometry(_geometry(_loop("l", 6.0)), path)
+    assert clearance_check(path).ok

@@ -340,6 +340,41 @@ def test_a_crossing_between_two_samples_is_still_a_conflict():
     assert n[0] == 0
 
 
+def _loop_line(rise_m, radius=60.0, step=15.0):
+    """A lane centre sampled every ``step`` m: east along y = 0 to the origin, 270 degrees
+    left around (0, radius), then south across its own start at x = -radius; it climbs
+    ``rise_m`` between the two passes. Returns x, y, s, z ``(1, N)``, length ``(1,)``."""
+    lead = 200.0
+    s = np.arange(0.0, 2 * lead + 1.5 * math.pi * radius + 1e-9, step)
+    arc = np.clip(s - lead, 0.0, 1.5 * math.pi * radius) / radius
+    x = np.where(s < lead, s - lead, radius * np.sin(arc))
+    y = np.where(s < lead, 0.0, radius - radius * np.cos(arc))
+    after = s > lead + 1.5 * math.pi * radius
+    x = np.where(after, -radius, x)
+    y = np.where(after, radius - (s - lead - 1.5 * math.pi * radius), y)
+    z = s * rise_m / (1.5 * math.pi * radius + 2 * radius)
+    return x[None], y[None], s[None], z[None], np.array([s[-1]])
+
+
+def test_a_loop_crossing_itself_below_the_clearance_is_a_self_conflict():
+    """The kernel's own test of a ramp against itself (loops): the crossing of a loop's
+    last leg over its lead-in counts when 3.5 m apart, not when 6 m apart; nor do the
+    stretches next to each other, nor without a gap (ramps that cannot cross themselves)."""
+    args = (15.0, 1.5, 5.5)
+    n, depth = _kernels.self_conflicts(*_loop_line(3.5), *args, 8.0)
+    # the two stretches (and their neighbours sharing the crossing's sample points)
+    assert 1 <= n[0] <= 4 and depth[0] > 0.0
+    n, _ = _kernels.self_conflicts(*_loop_line(6.0), *args, 8.0)
+    assert n[0] == 0
+    n, _ = _kernels.self_conflicts(*_loop_line(3.5), *args, 0.0)
+    assert n[0] == 0
+    x, y, s, z, length = _loop_line(0.0)
+    keep = s[0] < 300.0  # the lead-in and the first quarter of the loop: no crossing
+    n, _ = _kernels.self_conflicts(x[:, keep], y[:, keep], s[:, keep], z[:, keep],
+                                   np.array([300.0]), *args, 8.0)
+    assert n[0] == 0
+
+
 def test_road_band_test_is_exact_along_the_whole_stretch():
     """Against a road band the conflict kernel tests the whole straight stretch between
     two samples: it finds what a very fine walk along it finds, and as deep (random

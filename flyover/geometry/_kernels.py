@@ -16,6 +16,10 @@ station linear along it), tested exactly against road bands and obstacle ramp
 points (which lie at most :data:`STEP_M` apart), so that a crossing cannot slip
 between samples. Only the inner points count (``end_zone`` from
 either end, where a ramp leaves or joins its parent, is exempt).
+
+A candidate whose heading spans far enough for it to cross itself (over
+:data:`SELF_TURN_RAD`: loops, and curves that loop and turn back) is also tested
+against its own lane centre (:func:`self_conflicts`), stretch against stretch.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["STEP_M", "grid", "cell_heights", "conflicts"]
+__all__ = ["STEP_M", "SELF_TURN_RAD", "grid", "cell_heights", "conflicts", "self_conflicts"]
 
 
 def grid(points: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, float, float, int, int]:
@@ -239,6 +243,133 @@ def conflicts(cx, cy, s, z, length, end_zone, hw, clearance, lines,
     return out, depth
 
 
+#: a candidate whose lane centre's heading spans more than this (rad) is tested against
+#: itself (:func:`self_conflicts`): between two points where a curve crosses itself its
+#: heading turns by at least half a turn (the loop it closes: 2 pi less the crossing's
+#: angle); 0.9 pi leaves a margin for coming within the lane's width of itself short of
+#: crossing. Not the ramp's intended turn: a ramp turning 123 degrees net can loop
+#: over itself and turn back (catalog j1)
+SELF_TURN_RAD = 0.9 * np.pi
+#: stretches per block of :func:`self_conflicts` (blocks whose boxes are apart skip their pairs)
+_SELF_BLOCK = 8
+
+
+@njit(cache=True, inline="always")
+def _segment_params(ax, ay, bx, by, cx, cy, dx, dy):  # pragma: no cover - compiled
+    """Parameters ``t, u`` in ``[0, 1]`` of the closest points of segments ``a-b`` and
+    ``c-d`` (Ericson, Real-Time Collision Detection, 5.1.9)."""
+    d1x, d1y, d2x, d2y = bx - ax, by - ay, dx - cx, dy - cy
+    rx, ry = ax - cx, ay - cy
+    a = d1x * d1x + d1y * d1y
+    e = d2x * d2x + d2y * d2y
+    f = d2x * rx + d2y * ry
+    if a <= 1e-12 and e <= 1e-12:
+        return 0.0, 0.0
+    if a <= 1e-12:
+        return 0.0, min(max(f / e, 0.0), 1.0)
+    c = d1x * rx + d1y * ry
+    if e <= 1e-12:
+        return min(max(-c / a, 0.0), 1.0), 0.0
+    b = d1x * d2x + d1y * d2y
+    den = a * e - b * b
+    t = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-12 else 0.0
+    u = (b * t + f) / e
+    if u < 0.0:
+        u = 0.0
+        t = min(max(-c / a, 0.0), 1.0)
+    elif u > 1.0:
+        u = 1.0
+        t = min(max((b - c) / a, 0.0), 1.0)
+    return t, u
+
+
+@njit(cache=True)
+def self_conflicts(cx, cy, s, z, length, end_zone, hw, clearance, gap):  # pragma: no cover
+    """Where each candidate's lane centre ``(P, N)`` meets itself at one level: pairs of
+    stretches (sample ``i - 1`` to ``i``, heights and stations linear) more than ``gap``
+    apart along it (station of the later one's start less the earlier one's end) whose
+    closest points are within the two half widths ``2 hw`` in plan and less than
+    ``clearance`` apart in height, both outside the end zones. Returns the count
+    ``(P,)`` and depth (the least move clear, sideways or up/down, summed) ``(P,)``.
+    Only candidates whose heading spans more than :data:`SELF_TURN_RAD` can meet
+    themselves (the others cost one pass over their samples). Stretches are grouped in
+    blocks of :data:`_SELF_BLOCK`; two blocks whose boxes are more than ``2 hw`` apart in
+    plan, or a clearance apart in height, are skipped."""
+    p_count, n = cx.shape
+    out = np.zeros(p_count, np.int64)
+    depth = np.zeros(p_count)
+    if gap <= 0.0 or n < 3:
+        return out, depth
+    reach = 2.0 * hw
+    nb = (n - 2) // _SELF_BLOCK + 1  # blocks of stretches 1 .. n - 1
+    bx0, bx1 = np.empty(nb), np.empty(nb)
+    by0, by1 = np.empty(nb), np.empty(nb)
+    bz0, bz1 = np.empty(nb), np.empty(nb)
+    for p in range(p_count):
+        # the span of the heading along the lane centre's stretches
+        h = h_lo = h_hi = 0.0
+        for i in range(2, n):
+            ux, uy = cx[p, i - 1] - cx[p, i - 2], cy[p, i - 1] - cy[p, i - 2]
+            vx, vy = cx[p, i] - cx[p, i - 1], cy[p, i] - cy[p, i - 1]
+            h += _step_angle(ux * vy - uy * vx, ux * vx + uy * vy)
+            h_lo, h_hi = min(h_lo, h), max(h_hi, h)
+        if h_hi - h_lo <= SELF_TURN_RAD:
+            continue
+        hi_s = length[p] - end_zone
+        for k in range(nb):
+            i0 = 1 + k * _SELF_BLOCK
+            i1 = min(i0 + _SELF_BLOCK, n)
+            bx0[k] = bx1[k] = cx[p, i0 - 1]
+            by0[k] = by1[k] = cy[p, i0 - 1]
+            bz0[k] = bz1[k] = z[p, i0 - 1]
+            for i in range(i0, i1):
+                bx0[k] = min(bx0[k], cx[p, i])
+                bx1[k] = max(bx1[k], cx[p, i])
+                by0[k] = min(by0[k], cy[p, i])
+                by1[k] = max(by1[k], cy[p, i])
+                bz0[k] = min(bz0[k], z[p, i])
+                bz1[k] = max(bz1[k], z[p, i])
+        for k in range(nb):
+            ka = 1 + k * _SELF_BLOCK
+            if s[p, min(ka + _SELF_BLOCK, n) - 1] <= end_zone or s[p, ka - 1] >= hi_s:
+                continue
+            for q in range(k, nb):
+                kb = 1 + q * _SELF_BLOCK
+                if s[p, min(kb + _SELF_BLOCK, n) - 1] - s[p, ka - 1] <= gap:
+                    continue  # nothing in these blocks is gap apart
+                if s[p, min(kb + _SELF_BLOCK, n) - 1] <= end_zone or s[p, kb - 1] >= hi_s:
+                    continue
+                if bx0[q] - bx1[k] >= reach or bx0[k] - bx1[q] >= reach or \
+                        by0[q] - by1[k] >= reach or by0[k] - by1[q] >= reach:
+                    continue
+                if bz0[q] - bz1[k] >= clearance or bz0[k] - bz1[q] >= clearance:
+                    continue
+                for i in range(ka, min(ka + _SELF_BLOCK, n)):
+                    for j in range(max(kb, i + 1), min(kb + _SELF_BLOCK, n)):
+                        if s[p, j - 1] - s[p, i] <= gap:
+                            continue
+                        t, u = _segment_params(cx[p, i - 1], cy[p, i - 1], cx[p, i], cy[p, i],
+                                               cx[p, j - 1], cy[p, j - 1], cx[p, j], cy[p, j])
+                        ex = (cx[p, i - 1] + t * (cx[p, i] - cx[p, i - 1])
+                              - cx[p, j - 1] - u * (cx[p, j] - cx[p, j - 1]))
+                        ey = (cy[p, i - 1] + t * (cy[p, i] - cy[p, i - 1])
+                              - cy[p, j - 1] - u * (cy[p, j] - cy[p, j - 1]))
+                        d = np.sqrt(ex * ex + ey * ey)
+                        if d >= reach:
+                            continue
+                        dz = abs(z[p, i - 1] + t * (z[p, i] - z[p, i - 1])
+                                 - z[p, j - 1] - u * (z[p, j] - z[p, j - 1]))
+                        if dz >= clearance:
+                            continue
+                        sa = s[p, i - 1] + t * (s[p, i] - s[p, i - 1])
+                        sb = s[p, j - 1] + u * (s[p, j] - s[p, j - 1])
+                        if sa <= end_zone or sa >= hi_s or sb <= end_zone or sb >= hi_s:
+                            continue
+                        out[p] += 1
+                        depth[p] += min(reach - d, clearance - dz)
+    return out, depth
+
+
 @njit(cache=True, inline="always")
 def _climb(s, h, grade, transition):  # pragma: no cover - compiled
     """Height gained after ``s`` metres of a climb of total ``h`` (see profile._climb)."""
@@ -364,19 +495,24 @@ def _scratch(m, n):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za, zc, zb, grade, transition,
                     cx, cy, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, reach, nx, ny, zlo, zhi):  # pragma: no cover - compiled
+                    x0, y0, cell, reach, nx, ny, zlo, zhi, gap):  # pragma: no cover - compiled
     """One candidate's conflicting samples and their depth (:func:`conflicts`) on its
-    lane centre (:func:`_lane`; ``ss`` its stations as row 0)."""
+    lane centre (:func:`_lane`; ``ss`` its stations as row 0), with its conflicts with
+    itself (:func:`self_conflicts`) when ``gap`` > 0."""
     _lane(xs, ys, tx, ty, sp, ss[0], length, width, za, zc, zb, grade, transition, cx, cy, zz)
     ln[0] = length
     c, d = conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, lines, px, py, pz, phw,
                      starts, x0, y0, cell, reach, nx, ny, zlo, zhi)
+    if gap > 0.0:
+        c2, d2 = self_conflicts(cx, cy, ss, zz, ln, end_zone, hw, clearance, gap)
+        return c[0] + c2[0], d[0] + d2[0]
     return c[0], d[0]
 
 
 @njit(cache=True, nogil=True)
 def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, clearance,
-                 lines, px, py, pz, phw, starts, x0, y0, cell, reach, nx, ny, zlo, zhi):  # pragma: no cover
+                 lines, px, py, pz, phw, starts, x0, y0, cell, reach, nx, ny, zlo, zhi,
+                 gap=0.0):  # pragma: no cover
     """Everything the ramp objective measures on candidate splines ``ctrl`` ``(P, n, 4, 2)``.
 
     Samples each cubic piece at ``m`` parameter values (as
@@ -384,7 +520,8 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
     length, minimum lane-centre radius, total turning, curvature variance,
     mean squared curvature, squared curvature jumps at joints, the number
     of conflicting samples and their depth (:func:`conflicts`; heights from the grade line of
-    :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``).
+    :func:`flyover.geometry.profile.heights` between ``za``, ``zc``, ``zb``; with
+    :func:`self_conflicts` when ``gap`` > 0).
     """
     p_count = ctrl.shape[0]
     out = np.zeros((6, p_count))
@@ -398,7 +535,7 @@ def spline_terms(ctrl, m, width, za, zc, zb, grade, transition, end_zone, hw, cl
         conf[p], deep[p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, r[0], width, za[p], zc[p],
                                            zb[p], grade, transition, cx, cy, zz, ln, end_zone,
                                            hw, clearance, lines, px, py, pz, phw, starts, x0,
-                                           y0, cell, reach, nx, ny, zlo, zhi)
+                                           y0, cell, reach, nx, ny, zlo, zhi, gap)
     return out[0], out[1], out[2], out[3], out[4], out[5], conf, deep
 
 
@@ -544,7 +681,7 @@ def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
                     z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound):  # pragma: no cover - compiled
+                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound, gap):  # pragma: no cover - compiled
     """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
@@ -563,7 +700,8 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     (the costly part): its conflicts are ``inf`` (depth 0), so it is never acceptable
     and its energy is ``inf``. With its conflicts the energy could only be higher (rounded
     sums are monotone), so a DE trial beaten this way loses to its parent exactly
-    as it would have.
+    as it would have. ``gap`` > 0: candidates are tested against themselves too
+    (:func:`self_conflicts`).
     """
     ctrl, st, poses, turn = decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off,
                                    free_mode, free_z, leads)
@@ -610,7 +748,8 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
         out[7, p], out[8, p] = _lane_conflicts(xs, ys, tx, ty, sp, ss, length, width, za[p],
                                                zc[p], zb[p], g, transition, cx, cy, zz, ln,
                                                end_zone, hw, clearance, lines, px, py, pz, phw,
-                                               starts, x0, y0, cell, reach, nx, ny, zlo, zhi)
+                                               starts, x0, y0, cell, reach, nx, ny, zlo, zhi,
+                                               gap)
     return out
 
 

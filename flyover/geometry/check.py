@@ -12,7 +12,12 @@ Rule (the fitter's, made symmetric): a lane-centre sample of ramp A, outside
   (less ``margin_m``) and is less than ``clearance_m`` above or below it;
 * a ramp B when a lane-centre sample of B, outside B's end zones, is closer
   than the two half widths (less ``margin_m`` each) and less than
-  ``clearance_m`` apart in height.
+  ``clearance_m`` apart in height;
+* itself, the same way, at a sample of its own lane centre more than ``2 x`` its
+  width further along it (a loop that turns far enough passes over or under its
+  own earlier part; samples closer along it are neighbours on one stretch of lane,
+  never a crossing: within the two half widths in plan only if the lane turned
+  back within a few metres).
 
 Distances and heights are compared to ``tolerance_m`` (5 cm): the search
 follows the lane centre and the profile in straight steps between its samples.
@@ -84,21 +89,42 @@ def _runs(ramp: str, other: str, s: np.ndarray, hit: np.ndarray, dz: np.ndarray,
     return out
 
 
+def _self_conflicts(rid: str, xy: np.ndarray, z: np.ndarray, s: np.ndarray, hw: float,
+                    gap: float, clearance: float, spacing: float) -> list[Conflict]:
+    """Where ramp ``rid``'s lane centre (inner samples) comes within its two half widths
+    ``hw`` of itself more than ``gap`` further along, less than ``clearance`` apart in
+    height: marked at the earlier station of each such pair."""
+    if len(s) < 2:
+        return []
+    pairs = cKDTree(xy).query_pairs(2.0 * hw, output_type="ndarray")
+    if not len(pairs):
+        return []
+    i, j = pairs.min(axis=1), pairs.max(axis=1)
+    far = np.abs(s[j] - s[i]) > gap
+    i, j = i[far], j[far]
+    dz = np.full(len(s), np.inf)
+    np.minimum.at(dz, i, np.abs(z[i] - z[j]))
+    return _runs(rid, rid, s, dz < clearance, dz, spacing)
+
+
 def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.0,
                          clearance_m: float = 5.5, end_zone_m: float = 15.0,
                          margin_m: float = 0.5, tolerance_m: float = 0.05
                          ) -> tuple[Conflict, ...]:
     """Every same-level conflict of ``geometry``, one :class:`Conflict` per run of
-    conflicting stations (ramp-ramp pairs reported once, by the first ramp id)."""
+    conflicting stations (ramp-ramp pairs reported once, by the first ramp id; a ramp
+    meeting itself once, ``other`` its own id, at the earlier of its two stations)."""
     clearance_m -= tolerance_m
-    lanes = {}
+    lanes, gaps = {}, {}
     for r in geometry.ramps:
         width = r.lanes * geometry.ramp_lane_width_m
         xy, z, s, length = _lane_centre(r, width, spacing_m)
         inner = (s > end_zone_m) & (s < length - end_zone_m)
         lanes[r.id] = (xy[inner], z[inner], s[inner], 0.5 * width - margin_m - tolerance_m / 2)
+        gaps[r.id] = 2.0 * width
     out: list[Conflict] = []
     for rid, (xy, z, s, hw) in sorted(lanes.items()):
+        out += _self_conflicts(rid, xy, z, s, hw, gaps[rid], clearance_m, spacing_m)
         for road in geometry.roads:
             d = np.array([math.cos(road.heading_rad), math.sin(road.heading_rad)])
             rel = xy - np.asarray(road.start)

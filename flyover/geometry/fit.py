@@ -325,15 +325,33 @@ def _obstacle_args(spec: RampSpec, obstacles: Obstacles, settings: FitSettings) 
     return (float(settings.end_zone_m), float(hw), float(settings.clearance_m), lines) + grid
 
 
+def _self_gap(spec: RampSpec, search: bool = False) -> float:
+    """How far apart along itself (m) a ramp's stretches must be to meet as a crossing
+    (two widths, as :func:`flyover.geometry.check.same_level_conflicts`; the kernel
+    tests only curves whose heading spans :data:`_kernels.SELF_TURN_RAD`). In the
+    ``search``, only for a ramp meant to turn that far (loops: 0 for the others, whose
+    searches stay as they were); a fitted ramp (:func:`recount`) is always tested, so one
+    that loops over itself and turns back counts its conflicts and is fitted again."""
+    if search and abs(spec.turn_rad) <= _kernels.SELF_TURN_RAD:
+        return 0.0
+    return 2.0 * float(spec.width_m)
+
+
 def _conflicts(spec: RampSpec, xy, tangent, s, z, length, obstacles: Obstacles,
-               settings: FitSettings) -> np.ndarray:
-    """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level."""
+               settings: FitSettings, gap: float = 0.0) -> np.ndarray:
+    """Number of lane-centre samples ``(P,)`` meeting an obstacle at the same level, and
+    with ``gap`` > 0 the pairs of stretches where the ramp meets itself
+    (:func:`_kernels.self_conflicts`)."""
     cx, cy = lane_centre(xy, tangent, spec.width_m)
-    return _kernels.conflicts(np.ascontiguousarray(cx), np.ascontiguousarray(cy),
-                              np.ascontiguousarray(s, float),
-                              np.ascontiguousarray(np.broadcast_to(z, s.shape), float),
-                              np.ascontiguousarray(length, float),
-                              *_obstacle_args(spec, obstacles, settings))[0]
+    cx, cy = np.ascontiguousarray(cx), np.ascontiguousarray(cy)
+    s = np.ascontiguousarray(s, float)
+    z = np.ascontiguousarray(np.broadcast_to(z, s.shape), float)
+    length = np.ascontiguousarray(length, float)
+    args = _obstacle_args(spec, obstacles, settings)
+    n = _kernels.conflicts(cx, cy, s, z, length, *args)[0]
+    if gap:
+        n = n + _kernels.self_conflicts(cx, cy, s, z, length, *args[:3], gap)[0]
+    return n
 
 
 def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
@@ -361,11 +379,12 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     weights = (float(settings.conflict_weight), float(settings.depth_weight),
                float(settings.compact_weight))
     w = np.array(weights)
+    gap = _self_gap(spec, search=True)
 
     def table(x: np.ndarray, bound: np.ndarray | None = None) -> np.ndarray:
         x = np.ascontiguousarray(x, float)
         b = np.full(x.shape[1], np.inf) if bound is None else np.ascontiguousarray(bound, float)
-        return _kernels.objective_terms(x, *args, w, b)
+        return _kernels.objective_terms(x, *args, w, b, gap)
 
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
         return dict(zip(_kernels.TERMS, table(x)))
@@ -586,14 +605,15 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
 
 
 def recount(fit: RampFit, obstacles: Obstacles, settings: FitSettings) -> RampFit:
-    """``fit`` with its same-level conflicts counted again against ``obstacles``
+    """``fit`` with its same-level conflicts counted again against ``obstacles`` and itself
     (as :func:`measure` counts them: 64 samples per piece)."""
     from flyover.geometry.profile import evaluate_polys  # noqa: PLC0415
 
     coarse = sample_spline(fit.ctrl, 64)
     z, _ = evaluate_polys(fit.elevation, coarse.s.ravel())
     conf = int(_conflicts(fit.spec, coarse.xy[None], coarse.tangent[None], coarse.s[None],
-                          z[None], np.array([fit.length_m]), obstacles, settings)[0])
+                          z[None], np.array([fit.length_m]), obstacles, settings,
+                          _self_gap(fit.spec))[0])
     return replace(fit, conflicts=conf)
 
 
