@@ -225,6 +225,16 @@ def grade_jumps(geometry) -> list[float]:
     return out
 
 
+def climb_m(fit, settings) -> float:
+    """The run a fitted ramp needs to climb from its start to its crest and down to its
+    end at its slope target (at least 0.5 %), vertical curves included."""
+    g = max(fit.spec.target_slope_pct, 0.5) / 100.0
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    top = max(fit.z_crest, za, zb)
+    tr = settings.fit.transition_m
+    return float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
+
+
 def need_m(fit, settings) -> float:
     """What a fitted ramp needed: the longer of its turn at its target radius (``inf``:
     ``inf_reference_m``) and its climb from its start to its crest and down to its end at
@@ -233,12 +243,7 @@ def need_m(fit, settings) -> float:
     sp = fit.spec
     r = sp.target_radius_m if math.isfinite(sp.target_radius_m) else \
         settings.fit.inf_reference_m
-    g = max(sp.target_slope_pct, 0.5) / 100.0
-    za, zb = fit.start_pose[3], fit.end_pose[3]
-    top = max(fit.z_crest, za, zb)
-    tr = settings.fit.transition_m
-    climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
-    return max(abs(sp.turn_rad) * r, climb) + 2.0 * settings.gap_m
+    return max(abs(sp.turn_rad) * r, climb_m(fit, settings)) + 2.0 * settings.gap_m
 
 
 def least_m(fit, settings, n: int = 24) -> float:
@@ -259,12 +264,7 @@ def least_m(fit, settings, n: int = 24) -> float:
     pa, ha, _ = a.at(np.linspace(a.lo, a.hi, n))
     pb, hb, _ = b.at(np.linspace(b.lo, b.hi, n))
     path = float(shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r).min())
-    g = max(sp.target_slope_pct, 0.5) / 100.0
-    za, zb = fit.start_pose[3], fit.end_pose[3]
-    top = max(fit.z_crest, za, zb)
-    tr = settings.fit.transition_m
-    climb = float(climb_distance(top - za, g, tr) + climb_distance(top - zb, g, tr))
-    return max(path, abs(sp.turn_rad) * r, climb)
+    return max(path, abs(sp.turn_rad) * r, climb_m(fit, settings))
 
 
 def footprint(ic) -> tuple[float, float]:
@@ -470,7 +470,7 @@ def main() -> None:
     settings = LayoutSettings.from_config(cfg["geometry"])
     profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
     seed = int(cfg["seed"])
-    rows, per_ic, names, fits, real, real_by_ramp = [], [], {}, [], {}, {}
+    rows, per_ic, names, fits, real_by_ramp = [], [], {}, [], {}
     jobs = []
     for name, topo in topologies(args.osm).items():
         if args.designs and name not in args.designs:
@@ -479,8 +479,6 @@ def main() -> None:
         if cid in names:  # the same class found again (another extract): built once
             continue
         names[cid] = name
-        real[name] = [float(topo.graph.nodes[r]["length_m"]) for r in topo.ramps
-                      if topo.graph.nodes[r].get("length_m")]
         real_by_ramp[cid] = {r: float(topo.graph.nodes[r]["length_m"]) for r in topo.ramps
                              if topo.graph.nodes[r].get("length_m")}
         if args.real_features is not None:
@@ -568,8 +566,9 @@ def main() -> None:
     for name, ls in sorted(lengths.items()):
         print(f"  {name:<17} median {np.median(ls):6.0f}  p95 {np.percentile(ls, 95):6.0f}  "
               f"max {max(ls):6.0f}  (n={len(ls)})", end="")
-        if real.get(name):  # the real interchange's ramps (OSM length_m)
-            rl = real[name]
+        cid = next(c for c, n in names.items() if n == name)
+        if real_by_ramp.get(cid):  # the real interchange's ramps (OSM length_m)
+            rl = list(real_by_ramp[cid].values())
             print(f"   real: median {np.median(rl):6.0f}  p95 {np.percentile(rl, 95):6.0f}  "
                   f"max {max(rl):6.0f}  (n={len(rl)})", end="")
         print()
