@@ -107,8 +107,7 @@ def uniform_parts(p: np.ndarray, drift_m: float = S_DRIFT_M) -> list[np.ndarray]
     n = max(2, math.ceil(math.sqrt(d / drift_m)))
     out: list[np.ndarray] = []
     for k in range(n):
-        q = split_bezier(p, k / n, (k + 1) / n)
-        out += [q] if s_drift(q) <= drift_m else uniform_parts(q, drift_m)
+        out += uniform_parts(split_bezier(p, k / n, (k + 1) / n), drift_m)
     return out
 
 
