@@ -120,6 +120,9 @@ def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.
         width = r.lanes * geometry.ramp_lane_width_m
         xy, z, s, length = _lane_centre(r, width, spacing_m)
         inner = (s > end_zone_m) & (s < length - end_zone_m)
+        # one sample per quarter spacing (a piece is sampled as finely as the longest one:
+        # up to ten per metre, which made the pair searches quadratic in that density)
+        inner &= np.diff(np.floor(4.0 * s / spacing_m), prepend=-1.0) > 0
         lanes[r.id] = (xy[inner], z[inner], s[inner], 0.5 * width - margin_m - tolerance_m / 2)
         gaps[r.id] = 2.0 * width
     out: list[Conflict] = []
