@@ -594,9 +594,13 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
     assert len(jumps) == 2 and max(jumps) <= 0.5
     # without the rule, the same build joins r3 on its grade
     monkeypatch.setattr(rails.AttachmentWindows, "level_part",
-                        lambda self, parent, lo, hi: (lo, hi))
+                        lambda self, parent, lo, hi, limit=None: (lo, hi))
     anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=11, settings=st)
-    assert max(_grade_jumps(anywhere.geometry)) > 3.0
+    g = anywhere.geometry
+    _, on_r3 = evaluate_polys(g.ramp("r3").elevation, np.array([g.ramp("r2").end.s_m]))
+    assert abs(on_r3[0]) > 0.03
+    # (and there r2 now ends at r3's grade: no jump either way)
+    assert max(_grade_jumps(g)) < 0.1
 
 
 def test_collector_distributor_roads_run_beside_their_carriageway():
@@ -694,3 +698,20 @@ def test_a_five_leg_interchange_builds_and_exports_with_attachments_on_their_roa
     assert not same_level_conflicts(g)
     assert all(o.fit.ok or o.infeasible for o in ic.outcomes)
     assert b"<road " in xodr_bytes(g)
+
+
+def test_a_ramp_attached_on_its_parents_grade_starts_and_ends_at_that_grade():
+    """J1's r2 (2 % target) joins r3 (2 %) on r3's climb (benchmark sample 3): its profile
+    ended level, a 2 pp kink where the two lanes meet. Now it ends at r3's grade there,
+    and its own slope stays within its target."""
+    t = catalog_topologies()["j1"]
+    feats = {"r1": RampFeatures(40.0, 1.0), "r2": RampFeatures(60.0, 2.0),
+             "r3": RampFeatures(30.0, 2.0), "r4": RampFeatures(280.0, 1.0)}
+    lanes = {"R1": 4, "R2": 4, "R3": 5, "R4": 4}
+    ic = build_interchange(t, lanes, feats, seed=3128706978, settings=LayoutSettings())
+    g = ic.geometry
+    r2, r3 = g.ramp("r2"), g.ramp("r3")
+    _, grade_r3 = evaluate_polys(r3.elevation, np.array([r2.end.s_m]))
+    assert abs(grade_r3[0]) > 0.015  # it does join r3 on its climb
+    assert max(_grade_jumps(g)) < 0.1
+    assert all(o.fit.ok for o in ic.outcomes)

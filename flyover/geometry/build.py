@@ -17,9 +17,10 @@ and the ramps already fitted:
    from that end takes: up beside its road before it turns over the other
    carriageway), then also with one more Bézier piece, then with one more
    piece but no leads, then with other seeds (``restarts`` fits in all); a
-   ramp attached to a ramp is first held to where its parent is level (no jump in
-   grade, :meth:`flyover.geometry.rails.AttachmentWindows.level_part`) and, if
-   it misses its targets there, fitted so again anywhere in its windows;
+   ramp attached to a ramp is first held to where its parent is level
+   (:meth:`flyover.geometry.rails.AttachmentWindows.level_part`; else where its
+   parent is no steeper than its slope target) and, if it misses its targets
+   there, fitted so again anywhere in its windows where its parent is no steeper;
 3. one that still meets fitted ramps at its level makes way (rip-up and
    reroute): each ramp it meets, if nothing is attached to it yet and it is
    not its parent, is fitted again on its own targets with the new ramp's
@@ -224,7 +225,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2
             if not fit.ok and not _systematic(fit):  # held to where its parent is level:
-                loose = b.spec(ramp, feat, level=False)  # then anywhere in its windows
+                loose = b.spec(ramp, feat, level=False)  # then anywhere not too steep
                 if _windows(loose) != _windows(spec):
                     fit2, e2, s2 = _fit_with_levels(b, loose, rseed + 3)
                     evals, secs = evals + e2, secs + s2

@@ -104,6 +104,11 @@ class Rail:
         n = heading_vec(h + np.pi / 2)
         return np.stack([x, y], axis=-1) + self.offset_m * n, h, z
 
+    def grade(self, s: float) -> float:
+        """The parent's grade at station ``s`` (of the heights :meth:`at` interpolates)."""
+        i = int(np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, len(self.s) - 2))
+        return float((self.z[i + 1] - self.z[i]) / max(self.s[i + 1] - self.s[i], 1e-9))
+
 
 @dataclass(frozen=True)
 class FreeEnd:
@@ -597,7 +602,11 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
     za, zb = pose_a[3], pose_b[3]
     zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
     g = spec.target_slope_pct / 100.0
-    polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m)
+    # a ramp leaving (joining) a ramp on a grade starts (ends) at its grade: no kink
+    ga = spec.start.grade(start_s) if spec.start is not None else 0.0
+    gb = spec.end.grade(end_s) if spec.end is not None else 0.0
+    polys = elevation_polys(length, za, zc, zb, g if g > 0 else 1.0, settings.transition_m,
+                            ga, gb)
     slope = max_grade(polys, length) * 100.0
     fit = RampFit(spec, ctrl, start_s, end_s, pose_a, pose_b, polys, length, rmin, slope, 0,
                   evaluations, seconds, zc)

@@ -1,13 +1,22 @@
 """Vertical profiles of ramps: a smooth grade line between the heights of its ends.
 
-A ramp starts at height ``z0`` and ends at ``z1``, both with zero grade (it
-leaves and joins level carriageways), and may have to pass a crest ``zc``
+A ramp starts at height ``z0`` and ends at ``z1``, both with zero grade where it
+leaves and joins a level carriageway, and may have to pass a crest ``zc``
 (a flyover). Its profile climbs (or descends) from ``z0`` to ``zc`` as early as
 possible and from ``zc`` to ``z1`` as late as possible, each time with a
 parabolic vertical curve of length ``T`` into and out of a constant grade
 ``g``. The maximum longitudinal slope is therefore exactly ``g`` whenever the
 ramp is long enough; otherwise the grade needed (:func:`required_grade`) is
 steeper and the ramp misses its target.
+
+A ramp leaving (joining) another ramp where that one is on a grade starts (ends)
+at that grade, ``g0`` (``g1``), so that the road has no kink in its profile: its
+climb (descent) then begins with a vertical curve from that grade to its own at
+the same rate (``g / T`` per metre), and peaks lower where the climb is short
+(:func:`_leg`); where its parent climbs on beyond the ramp's crest, the ramp's
+crest rises to where that grade runs out (a crest curve). With ``g0 = g1 = 0``
+the profile is the one above, and the one the search assumes
+(:func:`heights`).
 
 Example
 -------
@@ -19,6 +28,8 @@ Example
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -58,11 +69,48 @@ def heights(s: np.ndarray, length: np.ndarray, z0, zc, z1, grade: float,
     return z0 + rise + fall
 
 
+def _leg(h: float, e: float, grade: float, transition: float) -> tuple[float, float, float, float]:
+    """A climb of ``h >= 0`` that starts at grade ``e`` (toward the top, may be negative)
+    and ends level: ``(a1, q, m, a2)``: a vertical curve of ``a1`` m from ``e`` to the
+    peak grade ``q``, ``m`` m at ``q``, a curve of ``a2`` m from ``q`` to level, both curves
+    at ``grade / transition`` per metre. ``q`` is ``grade`` unless the climb is too
+    short for it; ``h`` is at least what levelling off from ``e`` gains
+    (:func:`_crest`)."""
+    t = transition
+    q = grade
+    m = (h - t * (2 * grade**2 - e**2) / (2 * grade)) / grade if e <= grade else \
+        (h - t * e**2 / (2 * grade)) / grade
+    if m < 0:
+        m, q = 0.0, min(grade, math.sqrt(max(grade * h / t + e**2 / 2, 0.0)))
+    return t * abs(q - e) / grade, q, m, t * q / grade
+
+
+def _crest(z0: float, zc: float, z1: float, g0: float, g1: float, grade: float,
+           transition: float) -> float:
+    """The crest, raised where a ramp starts climbing (ends descending) at a grade whose
+    levelling off alone gains more than the climb to ``zc``."""
+    top = zc
+    for z, e in ((z0, g0), (z1, -g1)):
+        if e > 0:
+            top = max(top, z + e**2 * transition / (2 * grade))
+    return top
+
+
+def _leg_length(h: float, e: float, grade: float, transition: float) -> float:
+    if e == 0.0:
+        return float(climb_distance(h, grade, transition))
+    a1, _, m, a2 = _leg(h, e, grade, transition)
+    return a1 + m + a2
+
+
 def required_grade(length: float, z0: float, zc: float, z1: float, grade: float,
-                   transition: float) -> float:
-    """The smallest grade ``>= grade`` whose profile fits in ``length`` (bisection)."""
+                   transition: float, g0: float = 0.0, g1: float = 0.0) -> float:
+    """The smallest grade ``>= grade`` whose profile fits in ``length`` (bisection);
+    ``g0``/``g1``: the grades it starts and ends at."""
     def need(g: float) -> float:
-        return float(climb_distance(zc - z0, g, transition) + climb_distance(zc - z1, g, transition))
+        top = _crest(z0, zc, z1, g0, g1, g, transition)
+        return float(_leg_length(top - z0, g0, g, transition)
+                     + _leg_length(top - z1, -g1, g, transition))
 
     if need(grade) <= length:
         return grade
@@ -89,20 +137,54 @@ def _climb_polys(s0: float, z0: float, h: float, sign: float, grade: float,
     return out
 
 
+def _leg_polys(s0: float, z0: float, h: float, e: float, grade: float,
+               transition: float) -> list[ElevationPoly]:
+    """The climb of :func:`_leg` from ``(s0, z0)`` (``e``: the grade it starts at)."""
+    a1, q, m, a2 = _leg(h, e, grade, transition)
+    out, s, z = [], float(s0), float(z0)
+    if a1 > 1e-9:
+        out.append(ElevationPoly(s, z, float(e), float((q - e) / (2 * a1)), 0.0))
+        s, z = s + a1, z + (e + q) / 2 * a1
+    if m > 1e-9:
+        out.append(ElevationPoly(s, z, float(q), 0.0, 0.0))
+        s, z = s + m, z + q * m
+    if a2 > 1e-9:
+        out.append(ElevationPoly(s, z, float(q), float(-q / (2 * a2)), 0.0))
+    return out
+
+
+def _reversed(polys: list[ElevationPoly], span: float, length: float) -> list[ElevationPoly]:
+    """Quadratics of ``u = length - s`` over ``0..span`` as quadratics of ``s``."""
+    ends = [p.s_m for p in polys[1:]] + [span]
+    out = []
+    for p, u1 in zip(polys, ends):
+        d = u1 - p.s_m
+        out.append(ElevationPoly(float(length - p.s_m - d), p.a + p.b * d + p.c * d**2,
+                                 -p.b - 2 * p.c * d, p.c, 0.0))
+    return out[::-1]
+
+
 def elevation_polys(length: float, z0: float, zc: float, z1: float, grade: float,
-                    transition: float) -> tuple[ElevationPoly, ...]:
-    """OpenDRIVE-style elevation polynomials of the profile, covering ``0..length``.
+                    transition: float, g0: float = 0.0, g1: float = 0.0
+                    ) -> tuple[ElevationPoly, ...]:
+    """OpenDRIVE-style elevation polynomials of the profile, covering ``0..length``;
+    ``g0``/``g1``: the grades it starts and ends at (its parents', module doc).
 
     ``grade`` is raised to :func:`required_grade` when the ramp is too short.
     """
-    g = required_grade(length, z0, zc, z1, grade, transition)
+    g = required_grade(length, z0, zc, z1, grade, transition, g0, g1)
+    zc = _crest(z0, zc, z1, g0, g1, g, transition)
     hr, hf = abs(zc - z0), abs(zc - z1)
-    dr = float(climb_distance(hr, g, transition))
-    df = float(climb_distance(hf, g, transition))
-    polys = _climb_polys(0.0, z0, hr, np.sign(zc - z0), g, transition)
+    dr = _leg_length(hr, g0, g, transition)
+    df = _leg_length(hf, -g1, g, transition)
+    polys = _climb_polys(0.0, z0, hr, np.sign(zc - z0), g, transition) if g0 == 0.0 else \
+        _leg_polys(0.0, z0, hr, g0, g, transition)
     if length - df - dr > 1e-9 or not polys:
         polys.append(ElevationPoly(dr, float(zc), 0.0, 0.0, 0.0))
-    polys += _climb_polys(length - df, zc, hf, np.sign(z1 - zc), g, transition)
+    if g1 == 0.0:
+        polys += _climb_polys(length - df, zc, hf, np.sign(z1 - zc), g, transition)
+    else:  # the same climb from the end, backwards
+        polys += _reversed(_leg_polys(0.0, z1, hf, -g1, g, transition), df, length)
     return tuple(p for i, p in enumerate(polys) if i + 1 == len(polys) or polys[i + 1].s_m > p.s_m)
 
 

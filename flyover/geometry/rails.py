@@ -22,7 +22,9 @@ attachments) and the ramp's targets.
   attached on the side of a parent that faces a road (J1's r2 joins r3 on the
   left where r3 runs along R4's edge) attaches only where its lane is clear of
   that road. A ramp attached to a ramp does so where its parent is level, if its window
-  holds a level part (its profile starts and ends level: no jump in grade).
+  holds a level part, else where its parent is no steeper than the ramp's slope target:
+  it starts (ends) at its parent's grade there (:mod:`flyover.geometry.profile`), so
+  that grade counts toward its slope.
 * A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
   crossing; any other ramp within what it needs (``bound``, from
   :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
@@ -47,6 +49,9 @@ __all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M"]
 LEVEL_GRADE = 0.003
 #: the shortest level part of a parent's window that a child is held to (m)
 LEVEL_RUN_M = 5.0
+#: a child may attach where its parent is this much (a fraction) steeper than the
+#: child's slope target: within the target's tolerance (0.2 pp)
+GENTLE_MARGIN = 0.001
 
 
 class AttachmentWindows:
@@ -61,13 +66,15 @@ class AttachmentWindows:
              level: bool = True) -> Rail:
         """The rail of one end (``end`` = ``(parent, label)``) of ``ramp``; on a road, no
         farther than ``bound`` beyond the room it keeps from the crossing; on a ramp,
-        where that ramp is level if ``level`` (:meth:`level_part`)."""
+        where that ramp is level if ``level`` and it can, else where it is no steeper than
+        ``feat``'s slope target if it can (:meth:`level_part`)."""
         node, label = end
         if node in self.roads:
             pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
             return self.road_rail(node, ramp, feat, label, is_start, loop, pos, width, extra,
                                   bound)
-        return self.ramp_rail(node, ramp, label, is_start, width, level)
+        return self.ramp_rail(node, ramp, label, is_start, width, level,
+                              feat.slope_pct / 100.0 + GENTLE_MARGIN)
 
     def road_rail(self, road: str, ramp: str, feat: RampFeatures, label: Label,
                   is_start: bool, loop: bool, pos: float | None, width: float,
@@ -158,7 +165,7 @@ class AttachmentWindows:
         return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
 
     def ramp_rail(self, parent: str, ramp: str, label: Label, is_start: bool,
-                  width: float, level: bool = True) -> Rail:
+                  width: float, level: bool = True, gentle: float | None = None) -> Rail:
         st = self.fitted.stations[parent]
         length = st["s"][-1]
         pw = self.fitted.width[parent]
@@ -205,28 +212,34 @@ class AttachmentWindows:
             else:
                 lo, hi = 0.4 * length, 0.85 * length
             lo, hi = self.room_beside(parent, off, width, lo, hi)
-            if level:
-                lo, hi = self.level_part(parent, lo, hi)
+            for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
+                part = self.level_part(parent, lo, hi, limit)
+                if part is not None:
+                    lo, hi = part
+                    break
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
 
-    def level_part(self, parent: str, lo: float, hi: float) -> tuple[float, float]:
-        """The part of ``lo..hi`` on a fitted parent where it is level (grade at most
-        :data:`LEVEL_GRADE`), where a child may leave or join it without a jump in grade.
+    def level_part(self, parent: str, lo: float, hi: float,
+                   limit: float = LEVEL_GRADE) -> tuple[float, float] | None:
+        """The part of ``lo..hi`` on a fitted parent where its grade is at most ``limit``
+        (:data:`LEVEL_GRADE`: where it is level); ``None`` when no such run of stations
+        overlaps it.
 
-        A ramp's profile starts and ends level (:mod:`flyover.geometry.profile`): one
-        leaving its parent on the parent's climb started 4 pp flatter than the lane it
-        shared there (J1's r2 leaving r1). The window becomes the level run of stations
-        that overlaps it most; unchanged when it is level throughout or no level run
-        overlaps it (the jump then stays, and ``benchmarks/geometry.py`` counts it; moving
-        the window to the nearest level run instead cost 50 % more CPU on J1 for one
-        jump fewer in 24)."""
+        A ramp leaving or joining its parent on a grade starts or ends at that grade
+        (:mod:`flyover.geometry.profile`; until they did, one leaving its parent on the
+        parent's climb started 4 pp flatter than the lane it shared there, J1's r2 leaving
+        r1); it reads best where the parent is level, and its own slope target holds only
+        where the parent is no steeper. The window becomes the run of such stations that
+        overlaps it most; unchanged when it is within the limit throughout (moving the
+        window to the nearest level run instead, when none overlaps, cost 50 % more CPU
+        on J1 for one jump fewer in 24)."""
         st = self.fitted.stations[parent]
         s, z = st["s"], st["z"]
         if len(s) < 2:
             return lo, hi
-        level = np.abs(np.gradient(z, s)) <= LEVEL_GRADE
+        level = np.abs(np.gradient(z, s)) <= limit
         inside = (s >= lo) & (s <= hi)
         if level[inside].all():
             return lo, hi
@@ -234,7 +247,7 @@ class AttachmentWindows:
         runs = [(max(lo, s[a]), min(hi, s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
         runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
         if not runs:
-            return lo, hi
+            return None
         a, b = max(runs, key=lambda r: r[1] - r[0])
         return float(a), float(b)
 

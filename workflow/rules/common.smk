@@ -132,7 +132,9 @@ def class_tables(stage):
 # 15: expressways ending here (half lines) spread round the centre, on the level above the
 #     through ones; windows stay on carriageways that begin or end here (catalog unchanged)
 # 16: a ramp meeting itself at its level is a conflict (the search tests loops, the recount every ramp)
-GEOMETRY_VERSION = 16
+# 17: a ramp leaving / joining a ramp on a grade starts / ends at that grade (no kink); held to
+#     where its parent is no steeper than its slope target when no level part is in its window
+GEOMETRY_VERSION = 17
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
