@@ -715,3 +715,31 @@ def test_a_ramp_attached_on_its_parents_grade_starts_and_ends_at_that_grade():
     assert abs(grade_r3[0]) > 0.015  # it does join r3 on its climb
     assert max(_grade_jumps(g)) < 0.1
     assert all(o.fit.ok for o in ic.outcomes)
+
+
+def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeypatch):
+    """A cloverstack's outer connector (oA1) leaves the stub eA1, which is fitted before the
+    loop it goes round (lB1): where the stub ended, the connector had no room to turn round
+    a large loop, and went over or under it (benchmark sample 3: both connectors). The stub
+    now ends where a connector at its radius can go round a loop at its radius, and the
+    loop keeps off where the connector turns; with both rules off, the same feature set has
+    a connector over (or under) its loop."""
+    from flyover.geometry import levels, rails  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverstack"]
+    feats = {"eA1": (60, 5), "eA2": (40, 2), "fA1": (60, 2), "fA2": (100, 4), "lB1": (150, 1),
+             "lB2": (100, 4), "oA1": (210, 1), "oA2": (150, 2), "oB1": (150, 1), "oB2": (210, 4)}
+    feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in feats.items()}
+    lanes = {"A1": 5, "A2": 3, "B1": 5, "B2": 5}
+
+    def over(ic):
+        return {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)} & {
+            ("lB1", "oA1"), ("oA1", "lB1"), ("lB2", "oA2"), ("oA2", "lB2")}
+
+    ic = build_interchange(t, lanes, feats, seed=2113364338)
+    assert all(o.fit.ok for o in ic.outcomes)
+    assert not over(ic)
+    monkeypatch.setattr(rails.AttachmentWindows, "fences", lambda self, loop: [])
+    monkeypatch.setattr(rails.AttachmentWindows, "room_round", lambda self, loop, stub: 0.0)
+    monkeypatch.setattr(levels.LevelPlan, "round_room", lambda self, ramp: 0.0)
+    assert over(build_interchange(t, lanes, feats, seed=2113364338))

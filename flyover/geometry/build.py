@@ -10,7 +10,11 @@ and the ramps already fitted:
    (:mod:`flyover.geometry.collector`); a cloverleaf's outer connector is first
    fitted with its loop as an obstacle at every height, and one more Bézier
    piece to bow out with: it goes round the loop, not over or under it (if it
-   cannot meet its targets that way, it is fitted as any other ramp);
+   cannot meet its targets that way, it is fitted as any other ramp); a loop
+   whose outer connector leaves a stub fitted before it is first fitted inside
+   the fences that leave that connector room to go round it
+   (:meth:`flyover.geometry.rails.AttachmentWindows.fences`; if it cannot meet
+   its targets so, as any other ramp);
 1. a ramp that still conflicts is lifted to the next level (a flyover);
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb
@@ -85,7 +89,8 @@ def _collector(b: LayoutState, ramp: str, spec: RampSpec) -> RampFit | None:
 
 
 def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
-                     keep_out: frozenset[str] = frozenset()) -> tuple[RampFit, int, float]:
+                     keep_out: frozenset[str] = frozenset(),
+                     fences: tuple = ()) -> tuple[RampFit, int, float]:
     """Fit; while the ramp meets something at its level, lift its crest one level.
 
     The first fits have no leads; a ramp that still misses its targets is fitted
@@ -93,10 +98,11 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
     (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
     cubic cannot bend evenly enough for its radius), then with one more piece
     but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
-    in plan at all (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`)."""
+    in plan at all, ``fences``: bands it must not enter at any height
+    (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`)."""
     st = b.st
     evals, secs = 0, 0.0
-    obst = b.obstacles(keep_out)
+    obst = b.obstacles(keep_out, fences)
     tried = []
     more = replace(spec, pieces=spec.pieces + 1)
     plain_more = replace(more, lead_m=(None, None))
@@ -221,6 +227,14 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                 evals, secs = evals + e2, secs + s2
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
+        if fit is None and (fences := tuple(b.windows.fences(ramp))):
+            # a loop whose outer connector leaves a fitted stub keeps off where that one
+            # must turn round it (:meth:`AttachmentWindows.fences`); if it cannot meet its
+            # targets so, it is fitted as any other ramp
+            fenced, e2, s2 = _fit_with_levels(b, spec, rseed, fences=fences)
+            evals, secs = evals + e2, secs + s2
+            if fenced.ok and fenced.conflicts == 0:
+                fit = recount(fenced, b.obstacles(), st.fit)
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2

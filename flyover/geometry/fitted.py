@@ -49,12 +49,19 @@ class FittedRamps:
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
         self.bands = road_bands(self.roads, st)
 
-    def obstacles(self, keep_out: frozenset[str] = frozenset()) -> Obstacles:
+    def obstacles(self, keep_out: frozenset[str] = frozenset(),
+                  fences: tuple = ()) -> Obstacles:
         """Roads and fitted ramps; the fitted ramps in ``keep_out`` at every height (a
-        ramp must not cross them in plan at all)."""
+        ramp must not cross them in plan at all), and so the ``fences`` (road-frame bands
+        ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``, named ``fence``)."""
         st = self.st
         lines = self.bands
         names = [r.id for r in self.roads.values()]
+        step = st.fit.clearance_m
+        heights = np.arange(-step, st.levels_m[-1] + 2 * step, step)
+        if fences:
+            lines = np.vstack([lines] + [np.array([[*f, h] for h in heights]) for f in fences])
+            names += ["fence"] * (len(lines) - len(names))
         pts, zs, hw, owner = [], [], [], []
         for rid, s in self.stations.items():
             pts.append(s["centre"])
@@ -63,8 +70,6 @@ class FittedRamps:
             owner += [rid] * len(s["centre_z"])
         # a keep-out loop, copied at heights less than the clearance apart over every level:
         # no height of the ramp clears it
-        step = st.fit.clearance_m
-        heights = np.arange(-step, st.levels_m[-1] + 2 * step, step)
         for rid in sorted(keep_out & set(self.stations)):
             s = self.stations[rid]
             # not where it leaves or joins its roads (within keep_out_trim_m of its ends):

@@ -16,6 +16,9 @@ the settings.
   planned crest, so that they pass under every flyover.
 * A planned ramp's road ends, and those of a ramp it leaves or joins, keep room
   from the crossing to climb to (descend from) the crest at the ramp's slope.
+* A stub one of whose children is a loop's outer connector (a cloverstack's ``eA1``,
+  ``oA1`` going round ``lB1``) ends far enough out for that child to go round the loop
+  at their radius targets (:meth:`LevelPlan.round_room`).
 """
 
 from __future__ import annotations
@@ -107,4 +110,30 @@ class LevelPlan:
                 r = self.features[k].radius_m
                 extra = max(extra, self.st.turn_room * r if math.isfinite(r)
                             else self.st.fit.inf_reference_m)
+            if turning:
+                extra = max(extra, self.round_room(k))
         return extra
+
+    def round_room(self, ramp: str) -> float:
+        """Room toward the crossing where ``ramp`` starts (ends) on a stub, if it is the
+        outer connector of a loop (:meth:`Movements.goes_round_loop`, on a road both
+        attach to), so that it can go round the loop without an S-bend: a loop of radius
+        ``R`` in the corner of the two roads reaches ``sqrt(2) R + R`` out along the
+        corner's diagonal (beyond the room ``c`` between their centre lines); a connector
+        running along that diagonal outside it meets the road ``2 R + sqrt(2) (R + c)``
+        from the crossing, and leaves it about half its own radius earlier (a 45° turn),
+        after a taper (``gap_m``). 0 otherwise."""
+        moves, st = self.moves, self.st
+        mine = {e[0] for e in moves.ends(ramp) if e is not None and e[0] in self.roads}
+        for loop in moves.topo.ramps:
+            theirs = {e[0] for e in moves.ends(loop) if e is not None and e[0] in self.roads}
+            if loop in self.features and ramp in self.features and any(
+                    moves.goes_round_loop(ramp, loop, road) for road in sorted(mine & theirs)):
+                def built(r: float) -> float:
+                    return r if math.isfinite(r) else st.fit.inf_reference_m
+
+                c = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
+                r_loop = built(self.features[loop].radius_m)
+                return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
+                    + 0.5 * built(self.features[ramp].radius_m) + st.gap_m
+        return 0.0

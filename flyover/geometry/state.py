@@ -42,7 +42,7 @@ class LayoutState:
         width = {r: self.moves.lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.fitted = FittedRamps(self.moves, width, st)
         self.levels = LevelPlan(self.moves, self.features, st)
-        self.windows = AttachmentWindows(self.moves, self.fitted, st)
+        self.windows = AttachmentWindows(self.moves, self.fitted, st, self.features)
         self.specs = RampSpecs(self.moves, self.levels, self.fitted, self.windows, st)
 
     @property
@@ -61,8 +61,8 @@ class LayoutState:
     def spec(self, ramp: str, feat: RampFeatures, level: bool = True) -> RampSpec:
         return self.specs.spec(ramp, feat, level)
 
-    def obstacles(self, keep_out: frozenset[str] = frozenset()) -> Obstacles:
-        return self.fitted.obstacles(keep_out)
+    def obstacles(self, keep_out: frozenset[str] = frozenset(), fences: tuple = ()) -> Obstacles:
+        return self.fitted.obstacles(keep_out, fences)
 
     def record(self, ramp: str, fit: RampFit) -> None:
         self.fitted.record(ramp, fit)

@@ -134,7 +134,8 @@ def class_tables(stage):
 # 16: a ramp meeting itself at its level is a conflict (the search tests loops, the recount every ramp)
 # 17: a ramp leaving / joining a ramp on a grade starts / ends at that grade (no kink); held to
 #     where its parent is no steeper than its slope target when no level part is in its window
-GEOMETRY_VERSION = 17
+# 18: a stub whose child goes round a loop ends where it can; the loop keeps off that child's turn
+GEOMETRY_VERSION = 18
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
