@@ -148,7 +148,8 @@ def _build(job: tuple[str, int]) -> tuple:
         return name, sample, time.process_time() - t0, exc.located(where).one_line()
     secs = time.process_time() - t0
     try:
-        xodr = remeasure(ic.geometry)  # exported and read back
+        net = read_xodr(io.BytesIO(xodr_bytes(ic.geometry)))  # exported and read back
+        xodr = remeasure(ic.geometry, net=net)
     except FlyoverError as exc:
         return name, sample, secs, "export: " + exc.located(where).one_line()
     rebuilt = ic.geometry.seed != own  # kept a build with another seed (geometry.rebuilds)
@@ -173,7 +174,8 @@ def _build(job: tuple[str, int]) -> tuple:
         r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
             xodr.get(r["ramp"], (math.nan,) * 4)
     return (name, sample, secs, rows, [o.fit for o in ic.outcomes], dense, rebuilt,
-            bridges, footprint(ic), grade_jumps(ic.geometry), rounds)
+            bridges, footprint(ic), (grade_jumps(ic.geometry), xodr_grade_jumps(net, ic.geometry)),
+            rounds)
 
 
 def print_real_comparison(rows, names, real_by_ramp) -> None:
@@ -222,6 +224,33 @@ def grade_jumps(geometry) -> list[float]:
             _, g_child = evaluate_polys(r.elevation, np.array([s_child]))
             _, g_parent = evaluate_polys(parent.elevation, np.array([att.s_m]))
             out.append(100.0 * abs(float(g_child[0]) - float(g_parent[0])))
+    return out
+
+
+def xodr_grade_jumps(net, geometry) -> list[float]:
+    """For every road link of the exported .xodr (``net``, read back) between the roads of
+    two different ramps (a ramp's junction connecting road and its parent's road): |the
+    grade on one side − the grade on the other| (percentage points, in the direction of
+    travel), from the elevation records the reader evaluates."""
+    ramps = {r.id for r in geometry.ramps}
+
+    def grade(road, s: float) -> float:
+        a, b = max(0.0, s - 1e-3), min(road.length, s + 1e-3)
+        z = road.reference(np.array([a, b]))[2]
+        return float((z[1] - z[0]) / (b - a))
+
+    out = []
+    for road in net.roads.values():
+        for here, link in ((0.0, road.predecessor), (road.length, road.successor)):
+            if link is None or link[0] != "road" or link[1] not in net.roads:
+                continue
+            other = net.roads[link[1]]
+            if road.name == other.name or road.name not in ramps or other.name not in ramps:
+                continue
+            there = 0.0 if link[2] == "start" else other.length
+            # the other road goes on in this one's direction when the contact points differ
+            sign = 1.0 if (here == 0.0) != (link[2] == "start") else -1.0
+            out.append(100.0 * abs(grade(road, here) - sign * grade(other, there)))
     return out
 
 
@@ -352,7 +381,8 @@ def held_radius_xy(xy: np.ndarray, hold_m: float = HOLD_M, step_m: float = 0.5) 
     return float(r.min()) if len(r) else math.inf
 
 
-def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, float, float]]:
+def remeasure(geometry, tapers: bool = True, net=None
+              ) -> dict[str, tuple[float, float, float, float]]:
     """Ramp id → (min radius of the centre line of its own lanes, max slope %, min radius
     of the line width / 2 right of its reference line, min three-point radius of the
     centre line of its own lanes), read back from the exported .xodr (``tapers=False``:
@@ -370,8 +400,8 @@ def remeasure(geometry, tapers: bool = True) -> dict[str, tuple[float, float, fl
     to 15 % too wide.) The own lanes are followed through the lane links: on a piece
     where a merging or diverging ramp's auxiliary lane runs beside them (opened on the
     left by ``laneOffset``, which also shifts the reference line's lane layout), they do
-    not move, and neither does their centre."""
-    net = read_xodr(io.BytesIO(xodr_bytes(geometry)))
+    not move, and neither does their centre. ``net``: the .xodr already read back."""
+    net = net or read_xodr(io.BytesIO(xodr_bytes(geometry)))
     widths = {r.id: r.lanes * geometry.ramp_lane_width_m for r in geometry.ramps}
     lanes = {r.id: r.lanes for r in geometry.ramps}
     by_ramp: dict[str, list] = {}
@@ -500,6 +530,7 @@ def main() -> None:
     crossings: dict[str, list[int]] = {}
     boxes: dict[str, list[float]] = {}
     jumps: dict[str, list[float]] = {}
+    xodr_jumps: dict[str, list[float]] = {}
     rounded: dict[str, list[bool]] = {}
     round_misses: list[tuple] = []
     failed = []
@@ -511,7 +542,8 @@ def main() -> None:
         ic_rows, ic_fits, dense, again, bridges, box, jump, rnd = built
         rounded.setdefault(name, []).extend(r[0] for r in rnd)
         round_misses += [(name, sample, *r[1:]) for r in rnd if not r[0]]
-        jumps.setdefault(name, []).extend(jump)
+        jumps.setdefault(name, []).extend(jump[0])
+        xodr_jumps.setdefault(name, []).extend(jump[1])
         boxes.setdefault(name, []).append(box[0] * box[1] / 1e6)
         crossings.setdefault(name, []).append(bridges)
         if again:
@@ -639,8 +671,10 @@ def main() -> None:
     print("grade jump where a ramp leaves / joins a ramp (pp; > 0.5 pp counted):")
     for name, js in sorted(jumps.items()):
         if js:
+            xs = xodr_jumps.get(name) or [math.nan]
             print(f"  {name:<17} max {max(js):5.2f}  over 0.5 pp: {sum(j > 0.5 for j in js)} of "
-                  f"{len(js)}")
+                  f"{len(js)};  read back from the .xodr (every road link between two ramps): "
+                  f"max {max(xs):5.2f}  over 0.5 pp: {sum(j > 0.5 for j in xs)} of {len(xs)}")
     print("ramps crossing ramps in plan (a bridge each; flyover.geometry.check.ramp_crossings) "
           "per interchange:")
     for name, xs in sorted(crossings.items()):
