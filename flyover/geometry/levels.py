@@ -29,6 +29,7 @@ from typing import Mapping
 import numpy as np
 
 from flyover.geometry.chains import Movements, ends, road_of, wrap
+from flyover.geometry.profile import climb_distance
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
 
 __all__ = ["LevelPlan"]
@@ -118,7 +119,9 @@ class LevelPlan:
         """Room toward the crossing where ``ramp`` starts (ends) on a stub, if it is the
         outer connector of a loop (:meth:`Movements.goes_round_loop`, on a road both
         attach to), so that it can go round the loop without an S-bend: a loop of radius
-        ``R`` in the corner of the two roads reaches ``sqrt(2) R + R`` out along the
+        ``R`` (or, if its climb between its roads at its slope is longer than its turn,
+        the radius of a loop turning that length) in the corner of the two roads reaches
+        ``sqrt(2) R + R`` out along the
         corner's diagonal (beyond the room ``c`` between their centre lines); a connector
         running along that diagonal outside it meets the road ``2 R + sqrt(2) (R + c)``
         from the crossing, and leaves it about half its own radius earlier (a 45° turn),
@@ -133,7 +136,12 @@ class LevelPlan:
                     return r if math.isfinite(r) else st.fit.inf_reference_m
 
                 c = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
-                r_loop = built(self.features[loop].radius_m)
+                # a loop that must climb farther than its turn is long is as big as a loop
+                # turning that length (its climb between its roads at its slope)
+                zs = [self.roads[r].z for r in theirs] or [0.0]
+                g = max(self.features[loop].slope_pct, 0.5) / 100.0
+                climb = float(climb_distance(max(zs) - min(zs), g, st.fit.transition_m))
+                r_loop = max(built(self.features[loop].radius_m), climb / (1.5 * math.pi))
                 return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
                     + 0.5 * built(self.features[ramp].radius_m) + st.gap_m
         return 0.0
