@@ -365,6 +365,38 @@ def test_two_acceleration_lanes_close_one_after_the_other_on_stack4():
     assert _lanes_ending_together(xodr_bytes(catalog_geometry("stack4", 0))) == []
 
 
+def test_an_opening_lane_stops_widening_inside_its_lane_section_as_written():
+    """CommonRoad's converter finds where a lane that opens from zero width reaches full
+    width among the roots of its width's derivative no further than the lane section's
+    length (written section starts subtracted), compared exactly; where the root came out
+    beyond it (cloverleaf road 28: sections 79.99999999999999 m apart, root 80.0), it
+    re-drew the lane over its whole 200 m lanelet, 1.14 cm off its successor at the end
+    (the verifier's join/split connection errors). Every opening, as written, stops
+    widening at least 0.05 mm before its section's end (a 10 m taper: 0.1 mm)."""
+    from numpy.polynomial import polynomial as P
+
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("cloverleaf", 0)))).getroot()
+    margins = []
+    for road in root.iter("road"):
+        secs = road.findall("lanes/laneSection")
+        ends = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
+        for sec, end in zip(secs, ends):
+            length = end - float(sec.get("s"))
+            for lane in sec.findall("right/lane"):
+                w = lane.findall("width")[0]
+                coef = [float(w.get(k)) for k in "abcd"]
+                if coef[0] != 0.0 or not any(coef[1:]):
+                    continue
+                seg = (float(lane.findall("width")[1].get("sOffset"))
+                       if len(lane.findall("width")) > 1 else length)
+                r = P.polyroots(P.polyder(coef)).real
+                margins.append(seg - max(r))
+    assert len(margins) >= 8
+    assert min(margins) > 5e-5
+
+
 #: catalog designs and feature sets where a carriageway of 3 lanes ended into (began from) a
 #: one-lane ramp straight on with its two other lanes closing (opening) together (export
 #: version 10); the others are slow (a geometry build each)

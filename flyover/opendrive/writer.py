@@ -212,11 +212,26 @@ class _Junction:
     free: bool = False
 
 
+#: a lane that opens from zero width over a taper of length ``T`` reaches its full width (its
+#: width stops changing) at ``T * (1 - OPENING_MARGIN)``, not at the taper's very end: its
+#: width there is short of full by ``3 * OPENING_MARGIN**2`` of it (1.2e-9 m for 4 m).
+#: CommonRoad's converter looks for that place among the roots of the width's derivative no
+#: further than the lane section's length, compared exactly; computed from the written
+#: coefficients, a root at the very end came out beyond it by 1e-14 to 1e-6 m on some
+#: tapers (e.g. 80 m written as sections 79.99999999999999 m apart), and the converter then
+#: re-drew the lane over its whole lanelet, whose border ended 1-2 cm off its successor's
+#: (cloverleaf, cloverleaf C-D, parclo opposite).
+OPENING_MARGIN = 1e-5
+
+
 def _rising(w: float, T: float) -> Cubic:
-    return Cubic(0.0, 0.0, 0.0, 3 * w / T ** 2, -2 * w / T ** 3)
+    Tm = T * (1.0 - OPENING_MARGIN)
+    return Cubic(0.0, 0.0, 0.0, 3 * w / Tm ** 2, -2 * w / Tm ** 3)
 
 
 def _change(w0: float, w1: float, T: float) -> Cubic:
+    if w0 == 0.0 and w1 != 0.0:  # a lane that opens
+        return _rising(w1, T)
     return Cubic(0.0, w0, 0.0, 3 * (w1 - w0) / T ** 2, -2 * (w1 - w0) / T ** 3)
 
 
@@ -249,7 +264,9 @@ def _junction_widths(w: Cubic, length: float) -> tuple[Cubic, ...]:
         return (w,)
     w_end = float(w(length))
     if abs(w.a) < 1e-9 and abs(w_end) > 1e-9:
-        full, step = w_end, _rising(w_end, length)
+        # the width it opens to: where it stops changing (OPENING_MARGIN before the end)
+        full = float(w(-2.0 * w.c / (3.0 * w.d))) if w.d != 0.0 else w_end
+        step = _rising(full, length)
         if math.isclose(w.c, step.c, rel_tol=1e-9) and math.isclose(w.d, step.d, rel_tol=1e-9):
             r = _rising(full, T)
             return (r, Cubic(T, full, 0.0, 0.0, 0.0))
