@@ -15,7 +15,8 @@ Model
   closes to zero width after the junction. The lanes of a two-lane ramp open
   (close) one at a time, each over its own taper, never together at one point.
 * ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
-  a direct road link; lane counts and widths change smoothly on the ramp.
+  a direct road link; lane counts and widths change smoothly on the ramp, the
+  carriageway's lanes beyond the ramp's closing (opening) one at a time there too.
 * Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
   pRange="normalized">`` (exact), each cut into parts on which a reader's
   road position s (``p = s/length``) is within 5 cm of arc length
