@@ -79,7 +79,9 @@ class ExportOptions:
         (open) one at a time, each over its own ``taper_length_m``, with this much
         full width between one taper's end and the next one's start: the
         outermost lane first after a merge, the innermost first before a diverge.
-        Shortened in proportion with the other lengths where the piece has no room.
+        So do the lanes of a carriageway beyond a narrower ramp it ends into (begins
+        from) straight on, on the ramp's body. Shortened in proportion with the other
+        lengths where the piece has no room.
     weave_max_m
         A merge followed on the same side by a diverge, with as many ramp
         lanes, at most this far apart (the parent piece between the two
