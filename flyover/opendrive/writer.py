@@ -699,7 +699,9 @@ def _trans_sections(el: _Element, region: tuple, s0: float, T: float, G: float,
     lo, hi = min(n, el.lanes), max(n, el.lanes)
     link = {i: (w if i <= n else 0.0) for i in range(1, hi + 1)}  # widths at the link
     far = {i: (el.width if i <= el.lanes else 0.0) for i in range(1, hi + 1)}
-    order = list(range(hi, lo, -1))  # from the link: the outermost first
+    # from the link outward: the outermost of the lanes there ends first (the innermost of
+    # those not there begins first, where the ramp has more lanes than the carriageway)
+    order = list(range(hi, lo, -1)) if n > el.lanes else list(range(lo + 1, hi + 1))
     steps = []  # from the link outward: (length, {lane: "link" | "far" | "change"})
     for m, c in enumerate(order):
         state = {i: ("change" if m == 0 else "far") for i in range(1, lo + 1)}
