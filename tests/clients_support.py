@@ -47,7 +47,7 @@ TOLERANCE_M = 1e-6
 #: which moves a border point by more where our paramPoly3 (pRange normalized, not
 #: parametrized by arc length) runs faster than 1 m per m at a road's end, and further out
 #: on a curve (measured: up to 7.4e-4 m, cloverstack's ramp ends, at export version 7; at
-#: version 12, 3.0e-4 to 5.0e-4 m on the 17 interchanges measured). The 2.34e-3 m on
+#: version 12, 3.0e-4 to 5.2e-4 m on the 17 interchanges measured). The 2.34e-3 m on
 #: cloverstack feature set 0 at version 9 (this was 3e-3 for it) was not rounding: a
 #: deceleration lane the join/split step re-drew over its whole lanelet (its converter
 #: missed where the lane stops widening, see ``OPENING_MARGIN`` in the writer) ended off
