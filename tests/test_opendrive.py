@@ -397,6 +397,31 @@ def test_an_opening_lane_stops_widening_inside_its_lane_section_as_written():
     assert min(margins) > 5e-5
 
 
+def test_a_closing_lane_is_zero_wide_at_its_end_as_written():
+    """A lane that closes to zero width is, from its written coefficients, under 1e-8 m
+    wide at its section's end (CommonRoad's test for a lane that ends: above it, the
+    converter leaves the lane as it is and the verifier reports its crossing bounds). With
+    coefficients written to 12 decimals, a 3.75 m lane closing over 80 m ended 2.56e-7 m
+    wide (``d`` = 1.46484375e-05 rounded)."""
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("directional_t", 1)))).getroot()
+    ends = []
+    for road in root.iter("road"):
+        secs = road.findall("lanes/laneSection")
+        stops = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
+        for sec, stop in zip(secs, stops):
+            length = stop - float(sec.get("s"))
+            for lane in sec.findall("right/lane"):
+                w = lane.findall("width")[-1]
+                a, b, c, d = (float(w.get(k)) for k in "abcd")
+                t = length - float(w.get("sOffset"))
+                if a > 1.0 and abs(a + b * t + c * t * t + d * t ** 3) < 1e-3:
+                    ends.append(abs(a + b * t + c * t * t + d * t ** 3))
+    assert len(ends) >= 4
+    assert max(ends) < 1e-8
+
+
 #: catalog designs and feature sets where a carriageway of 3 lanes ended into (began from) a
 #: one-lane ramp straight on with its two other lanes closing (opening) together (export
 #: version 10); the others are slow (a geometry build each)
