@@ -363,3 +363,112 @@ def test_two_acceleration_lanes_close_one_after_the_other_on_stack4():
     from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
 
     assert _lanes_ending_together(xodr_bytes(catalog_geometry("stack4", 0))) == []
+
+
+def test_an_opening_lane_stops_widening_inside_its_lane_section_as_written():
+    """CommonRoad's converter finds where a lane that opens from zero width reaches full
+    width among the roots of its width's derivative no further than the lane section's
+    length (written section starts subtracted), compared exactly; where the root came out
+    beyond it (cloverleaf road 28: sections 79.99999999999999 m apart, root 80.0), it
+    re-drew the lane over its whole 200 m lanelet, 1.14 cm off its successor at the end
+    (the verifier's join/split connection errors). Every opening, as written, stops
+    widening at least 0.05 mm before its section's end (a 10 m taper: 0.1 mm)."""
+    from numpy.polynomial import polynomial as P
+
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("cloverleaf", 0)))).getroot()
+    margins = []
+    for road in root.iter("road"):
+        secs = road.findall("lanes/laneSection")
+        ends = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
+        for sec, end in zip(secs, ends):
+            length = end - float(sec.get("s"))
+            for lane in sec.findall("right/lane"):
+                w = lane.findall("width")[0]
+                coef = [float(w.get(k)) for k in "abcd"]
+                if coef[0] != 0.0 or not any(coef[1:]):
+                    continue
+                seg = (float(lane.findall("width")[1].get("sOffset"))
+                       if len(lane.findall("width")) > 1 else length)
+                r = P.polyroots(P.polyder(coef)).real
+                margins.append(seg - max(r))
+    assert len(margins) >= 8
+    assert min(margins) > 5e-5
+
+
+def test_a_closing_lane_is_zero_wide_at_its_end_as_written():
+    """A lane that closes to zero width is, from its written coefficients, under 1e-8 m
+    wide at its section's end (CommonRoad's test for a lane that ends: above it, the
+    converter leaves the lane as it is and the verifier reports its crossing bounds). With
+    coefficients written to 12 decimals, a 3.75 m lane closing over 80 m ended 2.56e-7 m
+    wide (``d`` = 1.46484375e-05 rounded)."""
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("directional_t", 1)))).getroot()
+    ends = []
+    for road in root.iter("road"):
+        secs = road.findall("lanes/laneSection")
+        stops = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
+        for sec, stop in zip(secs, stops):
+            length = stop - float(sec.get("s"))
+            for lane in sec.findall("right/lane"):
+                w = lane.findall("width")[-1]
+                a, b, c, d = (float(w.get(k)) for k in "abcd")
+                t = length - float(w.get("sOffset"))
+                if a > 1.0 and abs(a + b * t + c * t * t + d * t ** 3) < 1e-3:
+                    ends.append(abs(a + b * t + c * t * t + d * t ** 3))
+    assert len(ends) >= 4
+    assert max(ends) < 1e-8
+
+
+#: catalog designs and feature sets where a carriageway of 3 lanes ended into (began from) a
+#: one-lane ramp straight on with its two other lanes closing (opening) together (export
+#: version 10); the others are slow (a geometry build each)
+_TWO_LANES_TOGETHER_BEFORE = {("directional_t", 1), ("semidirectional_t", 1), ("trumpet", 1)}
+
+
+def _catalog_params():
+    from flyover.clients.designs import FEATURE_SETS, catalog_names  # noqa: PLC0415
+
+    return [pytest.param(n, v, id=f"{n}-{v}",
+                         marks=() if (n, v) in _TWO_LANES_TOGETHER_BEFORE else pytest.mark.slow)
+            for n in catalog_names() for v in range(len(FEATURE_SETS))]
+
+
+@pytest.mark.parametrize("name, variant", _catalog_params())
+def test_no_two_lanes_open_or_close_together_anywhere_on_the_catalog(name, variant):
+    """Every lane section of every road: at most one driving lane closes to (opens from)
+    zero width in it, the auxiliary lanes of speed-change regions and the lanes of a
+    carriageway beyond a narrower straight-on ramp alike."""
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    assert _lanes_ending_together(xodr_bytes(catalog_geometry(name, variant))) == []
+
+
+def test_carriageway_lanes_beyond_a_straight_on_ramp_close_one_at_a_time_on_its_body():
+    """directional_t, 3 lanes per road: the carriageway's end forks into rL (one lane,
+    straight on) and a ramp beside it. The connecting road carries the 3 lanes on at full
+    width, each linked to the body of rL, where the outermost closes over a taper (rL's own
+    lane widening to its width on the same taper), the middle one keeps full width for
+    ``lane_drop_spacing_m``, then closes over its own taper."""
+    from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
+
+    opts = ExportOptions()
+    g = catalog_geometry("directional_t", 1)
+    net = read_xodr(io.BytesIO(xodr_bytes(g, opts)))
+    roads = sorted((r for r in net.roads.values() if r.name == "rL"), key=lambda r: int(r.id))
+    conn, body = roads[0], roads[1]
+    assert conn.junction != "-1" and body.junction == "-1"
+    assert conn.lane_t(-3, conn.length, at_end=True)[1] == pytest.approx(-3 * 3.75)
+    drive = lambda sec: [ln for ln in sec.lanes.values() if ln.type == "driving"]  # noqa: E731
+    counts = [len(drive(sec)) for sec in body.sections]
+    assert counts[:4] == [3, 2, 2, 1]
+    starts = [sec.s for sec in body.sections[:4]]
+    assert np.diff(starts) == pytest.approx([opts.taper_length_m, opts.lane_drop_spacing_m,
+                                             opts.taper_length_m])
+    ok, detail = check_continuity(net)
+    assert ok, detail
+    # every lane of the connecting road goes on into the body
+    last = conn.sections[-1]
+    assert sorted(k for ln in drive(last) for k in ln.successors) == [-3, -2, -1]

@@ -15,7 +15,8 @@ Model
   closes to zero width after the junction. The lanes of a two-lane ramp open
   (close) one at a time, each over its own taper, never together at one point.
 * ``Out-M``/``In-M`` (a carriageway ending into or beginning from a ramp) is
-  a direct road link; lane counts and widths change smoothly on the ramp.
+  a direct road link; lane counts and widths change smoothly on the ramp, the
+  carriageway's lanes beyond the ramp's closing (opening) one at a time there too.
 * Straight pieces are ``<line>``, Bézier pieces ``<paramPoly3
   pRange="normalized">`` (exact), each cut into parts on which a reader's
   road position s (``p = s/length``) is within 5 cm of arc length
@@ -78,7 +79,9 @@ class ExportOptions:
         (open) one at a time, each over its own ``taper_length_m``, with this much
         full width between one taper's end and the next one's start: the
         outermost lane first after a merge, the innermost first before a diverge.
-        Shortened in proportion with the other lengths where the piece has no room.
+        So do the lanes of a carriageway beyond a narrower ramp it ends into (begins
+        from) straight on, on the ramp's body. Shortened in proportion with the other
+        lengths where the piece has no room.
     weave_max_m
         A merge followed on the same side by a diverge, with as many ramp
         lanes, at most this far apart (the parent piece between the two
@@ -212,11 +215,26 @@ class _Junction:
     free: bool = False
 
 
+#: a lane that opens from zero width over a taper of length ``T`` reaches its full width (its
+#: width stops changing) at ``T * (1 - OPENING_MARGIN)``, not at the taper's very end: its
+#: width there is short of full by ``3 * OPENING_MARGIN**2`` of it (1.2e-9 m for 4 m).
+#: CommonRoad's converter looks for that place among the roots of the width's derivative no
+#: further than the lane section's length, compared exactly; computed from the written
+#: coefficients, a root at the very end came out beyond it by 1e-14 to 1e-6 m on some
+#: tapers (e.g. 80 m written as sections 79.99999999999999 m apart), and the converter then
+#: re-drew the lane over its whole lanelet, whose border ended 1-2 cm off its successor's
+#: (cloverleaf, cloverleaf C-D, parclo opposite).
+OPENING_MARGIN = 1e-5
+
+
 def _rising(w: float, T: float) -> Cubic:
-    return Cubic(0.0, 0.0, 0.0, 3 * w / T ** 2, -2 * w / T ** 3)
+    Tm = T * (1.0 - OPENING_MARGIN)
+    return Cubic(0.0, 0.0, 0.0, 3 * w / Tm ** 2, -2 * w / Tm ** 3)
 
 
 def _change(w0: float, w1: float, T: float) -> Cubic:
+    if w0 == 0.0 and w1 != 0.0:  # a lane that opens
+        return _rising(w1, T)
     return Cubic(0.0, w0, 0.0, 3 * (w1 - w0) / T ** 2, -2 * (w1 - w0) / T ** 3)
 
 
@@ -249,7 +267,9 @@ def _junction_widths(w: Cubic, length: float) -> tuple[Cubic, ...]:
         return (w,)
     w_end = float(w(length))
     if abs(w.a) < 1e-9 and abs(w_end) > 1e-9:
-        full, step = w_end, _rising(w_end, length)
+        # the width it opens to: where it stops changing (OPENING_MARGIN before the end)
+        full = float(w(-2.0 * w.c / (3.0 * w.d))) if w.d != 0.0 else w_end
+        step = _rising(full, length)
         if math.isclose(w.c, step.c, rel_tol=1e-9) and math.isclose(w.d, step.d, rel_tol=1e-9):
             r = _rising(full, T)
             return (r, Cubic(T, full, 0.0, 0.0, 0.0))
@@ -440,20 +460,27 @@ def _link_fork(j: _Junction, pieces: dict[str, list[_Piece]], els: dict[str, _El
             # the carriageway's lanes beyond the ramp's end (begin) on the connecting road;
             # the ramp's own lanes change width over a taper on its body, where a 15 m
             # change bent their centre line (a 2-lane ramp: 0.25 m sideways, a 210 m ramp
-            # read back as 184 m)
+            # read back as 184 m); where two lanes or more end (begin) beyond the ramp's,
+            # they do so on the body too, one at a time (the connecting road has no room
+            # for their tapers), and the connecting road keeps them at full width
             ramp = els[e.ramp]
             body = rlist[ri + 1] if j.forking else rlist[ri - 1]
-            taper = (abs(par.width - ramp.width) > 1e-9 and body.junction is None
-                     and (body.start_region if j.forking else body.end_region) is None)
-            region = ("drop" if taper else "trans", par.lanes, par.width)
+            room = (body.junction is None
+                    and (body.start_region if j.forking else body.end_region) is None)
+            taper = abs(par.width - ramp.width) > 1e-9 and room
+            if room and par.lanes - ramp.lanes > 1:
+                region, body_region = ("keep", par.lanes, par.width), ("trans", par.lanes, par.width)
+            else:
+                region = ("drop" if taper else "trans", par.lanes, par.width)
+                body_region = ("trans", ramp.lanes, par.width) if taper else None
             if j.forking:
                 rp.start_region = region
-                if taper:
-                    body.start_region = ("trans", ramp.lanes, par.width)
+                if body_region is not None:
+                    body.start_region = body_region
             else:
                 rp.end_region = region
-                if taper:
-                    body.end_region = ("trans", ramp.lanes, par.width)
+                if body_region is not None:
+                    body.end_region = body_region
         if e.out:
             body = rlist[ri + 1]
             end_piece.succ, body.pred = ("junction", j.id), ("junction", j.id)
@@ -522,14 +549,32 @@ def _aux_count(region: tuple | None) -> int:
     return region[2] if region is not None and region[0] == "aux" else 0
 
 
-def _region_lengths(piece: _Piece, L: float, opts: ExportOptions
+def _taper_count(el: _Element, region: tuple | None) -> int:
+    """Tapers a region of a normal piece takes, one after the other (at least 1 if any).
+
+    An auxiliary region closes (opens) each of its lanes over its own taper; a width
+    transition toward (from) a carriageway of ``n`` lanes, where ``|n - lanes|`` lanes
+    end (begin), does the same (the first taper from the link also changes the widths
+    of the lanes that go on).
+    """
+    if region is None:
+        return 0
+    if region[0] == "aux":
+        return max(1, region[2])
+    if region[0] == "trans":
+        return max(1, abs(region[1] - el.lanes))
+    return 1
+
+
+def _region_lengths(el: _Element, piece: _Piece, L: float, opts: ExportOptions
                     ) -> tuple[float, float, float, float, float, bool]:
     """``(T0, T1, P0, P1, G, weave)``: taper, full-width and spacing lengths of a normal piece.
 
     An auxiliary lane runs full width for ``accel_length_m`` after a merge (start region)
     and ``decel_length_m`` before a diverge (end region), beside its taper; a width
-    transition has the taper alone. A region of ``k`` auxiliary lanes has ``k`` tapers
-    ``G`` = ``lane_drop_spacing_m`` apart (each lane closes, or opens, over its own).
+    transition has the taper alone. A region of ``k`` auxiliary lanes, or a transition
+    where ``k`` lanes end (begin), has ``k`` tapers ``G`` = ``lane_drop_spacing_m`` apart
+    (each lane closes, or opens, over its own).
     Where the piece is shorter than what its regions ask for, every length shrinks in
     the same proportion (without full-width parts this is the former
     ``min(taper, L / regions)``).
@@ -541,28 +586,32 @@ def _region_lengths(piece: _Piece, L: float, opts: ExportOptions
     T0, T1 = (T if r0 else 0.0), (T if r1 else 0.0)
     P0 = opts.accel_length_m if r0 is not None and r0[0] == "aux" else 0.0
     P1 = opts.decel_length_m if r1 is not None and r1[0] == "aux" else 0.0
-    k0, k1 = max(1, _aux_count(r0)), max(1, _aux_count(r1))
+    k0, k1 = max(1, _taper_count(el, r0)), max(1, _taper_count(el, r1))
     want = k0 * T0 + k1 * T1 + P0 + P1 + ((k0 - 1) + (k1 - 1)) * G
     # full lengths where they fit with a plain stretch beside them; else in proportion
     f = min(1.0, L / want, _FILL * L / want if P0 or P1 else 1.0) if want > 0 else 1.0
     return T0 * f, T1 * f, P0 * f, P1 * f, G * f, False
 
 
-def _region_span(region: tuple | None, T: float, P: float, G: float) -> float:
+def _region_span(el: _Element, region: tuple | None, T: float, P: float, G: float,
+                 one_taper: bool = False) -> float:
     """Length a region's lane sections take: its full-width part, tapers and the spacing between."""
     if region is None:
         return 0.0
-    k = max(1, _aux_count(region))
+    k = 1 if one_taper else _taper_count(el, region)
     return P + k * T + (k - 1) * G
 
 
 def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
-                  P0: float = 0.0, P1: float = 0.0, weave: bool = False, G: float = 0.0):
+                  P0: float = 0.0, P1: float = 0.0, weave: bool = False, G: float = 0.0,
+                  one_taper: bool = False):
     """Lane sections of a normal piece: list of (s, laneOffset cubic, [(key, width cubic)]).
 
     A region's auxiliary lanes run full width for ``P0`` (after the start) or ``P1``
-    (before the end) beside their tapers ``T0``/``T1``, one taper per lane, ``G`` apart;
-    ``weave``: one full-width auxiliary lane over the whole piece.
+    (before the end) beside their tapers ``T0``/``T1``, one taper per lane, ``G`` apart,
+    and so do the lanes a width transition ends (begins); ``weave``: one full-width
+    auxiliary lane over the whole piece; ``one_taper``: every region is one lane section
+    (a connecting road's).
     """
     L = piece.s1 - piece.s0
     base = [(("b", i), _const(el.width)) for i in range(1, el.lanes + 1)]
@@ -572,10 +621,13 @@ def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
     secs = []
     P0 = P0 if r0 else 0.0
     P1 = P1 if r1 else 0.0
-    s_plain0, s_plain1 = _region_span(r0, T0, P0, G), L - _region_span(r1, T1, P1, G)
+    s_plain0 = _region_span(el, r0, T0, P0, G, one_taper)
+    s_plain1 = L - _region_span(el, r1, T1, P1, G, one_taper)
     if r0:
         if r0[0] == "aux":
             secs += _aux_sections(el, r0, 0.0, T0, P0, G, opening=False, sh=sh)
+        elif r0[0] == "trans" and not one_taper and _taper_count(el, r0) > 1:
+            secs += _trans_sections(el, r0, 0.0, T0, G, opening=False, sh=sh)
         else:
             secs.append((0.0, _region_lanes(el, r0, T0, opening=False, sh=sh)))
     if s_plain1 - s_plain0 > 1e-6 or not (r0 or r1):
@@ -583,6 +635,8 @@ def _lanes_layout(el: _Element, piece: _Piece, T0: float, T1: float, sh: float,
     if r1:
         if r1[0] == "aux":
             secs += _aux_sections(el, r1, s_plain1, T1, P1, G, opening=True, sh=sh)
+        elif r1[0] == "trans" and not one_taper and _taper_count(el, r1) > 1:
+            secs += _trans_sections(el, r1, s_plain1, T1, G, opening=True, sh=sh)
         else:
             secs.append((s_plain1, _region_lanes(el, r1, T1, opening=True, sh=sh)))
     return secs
@@ -625,6 +679,61 @@ def _aux_sections(el: _Element, region: tuple, s0: float, T: float, P: float, G:
     return secs
 
 
+def _trans_sections(el: _Element, region: tuple, s0: float, T: float, G: float,
+                    opening: bool, sh: float) -> list:
+    """Lane sections of a width transition where several lanes end (begin), one at a time.
+
+    ``region = ("trans", n, w)``: at the piece's end nearest the link (its start if
+    ``opening`` is false) the lanes are the carriageway's ``n`` of width ``w``. Going
+    away from the link, the outermost lane that ends closes over ``T`` (and the lanes
+    that go on change their width over that same taper), the others keep width ``w``
+    for ``G``, the next closes, and so on; before the link (``opening``) the mirror
+    image, the innermost opening first.
+
+    >>> el = _Element("r1", "ramp", 1, 4.0, 500.0)
+    >>> secs = _trans_sections(el, ("trans", 3, 3.75), 0.0, 80.0, 80.0, False, 3.0)
+    >>> [(s, [k for k, _ in lanes if k[0] != "sh"]) for s, (_, lanes) in secs]
+    [(0.0, [('b', 1), ('x', 2), ('x', 3)]), (80.0, [('b', 1), ('x', 2)]), (160.0, [('b', 1), ('x', 2)])]
+    """
+    _, n, w = region
+    lo, hi = min(n, el.lanes), max(n, el.lanes)
+    link = {i: (w if i <= n else 0.0) for i in range(1, hi + 1)}  # widths at the link
+    far = {i: (el.width if i <= el.lanes else 0.0) for i in range(1, hi + 1)}
+    # from the link outward: the outermost of the lanes there ends first (the innermost of
+    # those not there begins first, where the ramp has more lanes than the carriageway)
+    order = list(range(hi, lo, -1)) if n > el.lanes else list(range(lo + 1, hi + 1))
+    steps = []  # from the link outward: (length, {lane: "link" | "far" | "change"})
+    for m, c in enumerate(order):
+        state = {i: ("change" if m == 0 else "far") for i in range(1, lo + 1)}
+        state.update({i: "far" for i in order[:m]})
+        state.update({i: "link" for i in order[m + 1:]})
+        state[c] = "change"
+        steps.append((T, state))
+        if m + 1 < len(order) and G > 1e-6:
+            steps.append((G, {i: ("link" if i in order[m + 1:] else "far") for i in state}))
+    if opening:
+        steps = steps[::-1]
+
+    def width(i: int, how: str) -> Cubic:
+        if how == "link":
+            return _const(link[i])
+        if how == "far":
+            return _const(far[i])
+        return _change(far[i], link[i], T) if opening else _change(link[i], far[i], T)
+
+    secs, s = [], s0
+    for length, state in steps:
+        lanes = []
+        for i in sorted(state):
+            cub = width(i, state[i])
+            if state[i] != "change" and abs(cub.a) < 1e-12:
+                continue  # closed (not yet open)
+            lanes.append((("b", i) if i <= el.lanes else ("x", i), cub))
+        secs.append((s, (_const(0.0), lanes + [(("sh",), _const(sh))])))
+        s += length
+    return secs
+
+
 def _aux_lanes(el: _Element, side: str, widths: dict[int, Cubic], sh: float):
     """``(laneOffset, lanes)`` of a section with auxiliary lanes ``widths`` beside the carriageway."""
     aux = [(("aux", j), widths[j]) for j in sorted(widths)]
@@ -641,6 +750,11 @@ def _region_lanes(el: _Element, region: tuple, T: float, opening: bool, sh: floa
     if kind == "aux":  # the full-width lanes of a weave (tapers: _aux_sections)
         _, side, k, w = region
         return _aux_lanes(el, side, {j: _const(w) for j in range(1, k + 1)}, sh)
+    if kind == "keep":  # a connecting road carries a carriageway's n lanes of width w on to
+        _, n, w = region  # (from) the ramp's body, where those beyond the ramp's close (open)
+        lanes = [(("b", i) if i <= el.lanes else ("x", i), _const(w))
+                 for i in range(1, max(n, el.lanes) + 1)]
+        return _const(0.0), lanes + [(("sh",), _const(sh))]
     # width transition toward/from a carriageway of n lanes of width w (Out-M / In-M);
     # "drop": only its lanes beyond the ramp's close (open), the ramp's keep width w
     kind, n, w = region
@@ -660,8 +774,17 @@ def _f(x: float) -> str:
     return repr(round(x, 12))
 
 
+def _coef(x: float) -> str:
+    """A polynomial coefficient to 15 significant digits: :func:`_f`'s 12 decimals kept a
+    3.75 m lane closing over 80 m (``d`` = 1.46484375e-05) 2.56e-7 m wide at its end, above
+    CommonRoad's 1e-8 m test for a lane that ends (it left the lane as it was, with bounds
+    that cross: ``polylines_intersection``)."""
+    x = float(x)
+    return "0.0" if abs(x) < 1e-16 else repr(float(f"{x:.15g}"))
+
+
 def _cubic_attrs(c: Cubic, s_name: str = "s") -> dict[str, str]:
-    return {s_name: _f(c.s), "a": _f(c.a), "b": _f(c.b), "c": _f(c.c), "d": _f(c.d)}
+    return {s_name: _f(c.s), "a": _f(c.a), "b": _coef(c.b), "c": _coef(c.c), "d": _coef(c.d)}
 
 
 def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
@@ -725,14 +848,14 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         for p in plist:
             L = p.s1 - p.s0
             if p.junction is not None and (p.start_region or p.end_region):
-                layouts[p.road_id] = _lanes_layout(el, p, L, L, sh)
+                layouts[p.road_id] = _lanes_layout(el, p, L, L, sh, one_taper=True)
                 continue
             if p.junction is not None:
                 layouts[p.road_id] = [(0.0, (_const(0.0), [(("b", i), _const(el.width))
                                                           for i in range(1, el.lanes + 1)]
                                              + [(("sh",), _const(sh))]))]
                 continue
-            T0, T1, P0, P1, G, weave = _region_lengths(p, L, opts)
+            T0, T1, P0, P1, G, weave = _region_lengths(el, p, L, opts)
             layouts[p.road_id] = _lanes_layout(el, p, T0, T1, sh, P0, P1, weave, G)
 
     def ids(rid_: int, which: int) -> dict[tuple, int]:
@@ -755,6 +878,7 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
         return out
 
     same = lambda k: k if k[0] in ("b", "sh") else None  # noqa: E731
+    same_x = lambda k: k if k[0] in ("b", "x", "sh") else None  # noqa: E731  (keep regions)
     for j in junctions:
         if j.group:
             for e in j.group:
@@ -765,10 +889,10 @@ def xodr_bytes(g: InterchangeGeometry, options: ExportOptions | None = None,
                     conn_links.append((j.id, up.road_id, rp.road_id, links))
                     pred_links[rp.road_id] = dict((b, a) for a, b in links)
                     succ_links[rp.road_id] = dict(keymap(ids(rp.road_id, -1),
-                                                         ids(rp.succ[1], 0), same))
+                                                         ids(rp.succ[1], 0), same_x))
                 else:
                     body, down = by_id[rp.pred[1]], by_id[rp.succ[1]]
-                    links = keymap(ids(body.road_id, -1), ids(rp.road_id, 0), same)
+                    links = keymap(ids(body.road_id, -1), ids(rp.road_id, 0), same_x)
                     conn_links.append((j.id, body.road_id, rp.road_id, links))
                     pred_links[rp.road_id] = dict((b, a) for a, b in links)
                     inv = _branch_map(j, e, els, inverse=True)
@@ -964,8 +1088,6 @@ def _write_road(root, el: _Element, p: _Piece, layout, preds: dict, succs: dict)
                                     type="shoulder" if key[0] == "sh" else "driving", level="false")
             pred = prev_keys.get(key) if idx > 0 else preds.get(lid)
             succ = next_keys.get(key) if idx + 1 < len(layout) else succs.get(lid)
-            if idx > 0 and key[0] == "x":
-                pred = None
             # a lane that starts (ends) at zero width has no predecessor (successor)
             if abs(w.a) < 1e-9:
                 pred = None
