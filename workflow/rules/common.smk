@@ -136,7 +136,8 @@ def class_tables(stage):
 #     where its parent is no steeper than its slope target when no level part is in its window
 # 18: a stub whose child goes round a loop ends where it can; the loop keeps off that child's turn
 # 19: a terminal keeps room for the ramps attached there to climb at their own chain's slope,
-#     not the flattest ramp's, and none for ramps staying on its level (catalog unchanged)
+#     not the flattest ramp's, and none for ramps staying on its level; a left turn between two
+#     expressways ending here crests a level above theirs (catalog unchanged)
 GEOMETRY_VERSION = 19
 
 
