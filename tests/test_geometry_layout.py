@@ -745,43 +745,6 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     assert over(build_interchange(t, lanes, feats, seed=2113364338))
 
 
-def test_a_terminal_keeps_room_for_the_ramps_attached_there_to_climb_not_for_others():
-    from flyover.geometry.roads import terminal_room  # noqa: PLC0415
-    from flyover.geometry.state import LayoutState  # noqa: PLC0415
-
-    st = LayoutSettings()
-    t = _five_leg()
-    # p, q link A (through, level 0) and B's terminals (level 1); r, s A and C's; x, y
-    # link B and C (one level) along their carriageways, however flat
-    slopes = dict(p=5.0, q=4.0, r=2.0, s=3.0, x=1.0, y=1.0)
-    room = terminal_room(t, slopes, st)
-    climb = st.level_height_m
-    assert room == pytest.approx({"B": climb / 0.04 + st.fit.transition_m,
-                                  "C": climb / 0.02 + st.fit.transition_m})
-    b = LayoutState(t, {}, {r: RampFeatures(150.0, g) for r, g in slopes.items()}, st, 0)
-    other = b.roads["A1"].half_width
-    assert b.roads["B1"].t_lo == pytest.approx(other + st.terminal_m + room["B"])
-    assert b.roads["C2"].t_hi == pytest.approx(-(other + st.terminal_m + room["C"]))
-
-
-def test_a_ramp_between_two_terminals_on_one_level_needs_no_room_there():
-    from flyover.geometry.roads import terminal_room  # noqa: PLC0415
-
-    c = Connection
-    # B and C both end here (level 1); w runs from C's terminal to B's, on their level
-    t = Topology.build(
-        "five_leg_w", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2")],
-        [Ramp(x) for x in "pqrsw"],
-        [c("A1", "p", Label.OUT_R, 0.3), c("p", "B1", Label.IN_R, 0.5),
-         c("B2", "q", Label.OUT_R, 0.5), c("q", "A2", Label.IN_R, 0.7),
-         c("A2", "r", Label.OUT_R, 0.3), c("r", "C1", Label.IN_R, 0.5),
-         c("C2", "s", Label.OUT_R, 0.5), c("s", "A1", Label.IN_R, 0.7),
-         c("C2", "w", Label.OUT_M), c("w", "B1", Label.IN_M)])
-    st = LayoutSettings()
-    room = terminal_room(t, dict(p=5.0, q=5.0, r=5.0, s=5.0, w=1.0), st)
-    assert room == {}
-
-
 def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():
     from flyover.geometry.state import LayoutState  # noqa: PLC0415
 

@@ -12,9 +12,8 @@ settings.
   (a 5-leg interchange's half lines spread round the centre). An expressway
   that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
   end/begin ``terminal_m`` from the centre on the side the topology implies
-  (farther by ``terminal_extra``, :func:`terminal_room`: far enough for the ramps
-  attached at that end to climb to the level of the roads they lead to). Each through
-  expressway is on its own level (0, 1, ...); the
+  (farther by ``terminal_extra``: far enough for a ramp to climb one level
+  there). Each through expressway is on its own level (0, 1, ...); the
   terminating ones, which never meet, share the level above them (a T's
   terminating expressway above the through one).
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
@@ -34,7 +33,7 @@ from flyover.geometry.chains import ends, road_of, terminal, wrap
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label, Topology
 
-__all__ = ["RoadLine", "layout_roads", "road_bands", "road_levels", "terminal_room"]
+__all__ = ["RoadLine", "layout_roads", "road_bands"]
 
 
 @dataclass(frozen=True)
@@ -53,74 +52,10 @@ class RoadLine:
     half_width: float  # of its expressway, median to outer edge
 
 
-def road_levels(topo: Topology) -> dict[str, int]:
-    """Expressway → level: each through expressway on its own (0, 1, ... in id order),
-    the terminating ones (half lines in directions of their own: they never meet) on the
-    one above them all."""
-    exps = topo.expressways
-    term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
-    order = sorted(exps, key=lambda e: (term_of[e], e))
-    n_through = sum(not term_of[e] for e in exps)
-    return {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
-
-
-def terminal_room(topo: Topology, slopes: Mapping[str, float],
-                  st: LayoutSettings) -> dict[str, float]:
-    """Expressway ending here → how much farther out than ``terminal_m`` its carriageways
-    end (begin): far enough for every ramp attached at that end (``Out-M``/``In-M``, or
-    ``pos`` at the end) to climb, at the flattest slope target (``slopes``: ramp → %)
-    along its chain of ramps, to the level of the farthest road the chain leads to
-    (another level: :func:`road_levels`). A ramp that stays on the level (to another
-    expressway ending here) needs no room there, however flat."""
-    g = topo.graph
-    level = road_levels(topo)
-    exp_of = {r: e for e, rs in topo.expressways.items() for r in rs}
-    out = {}
-    for e, rs in sorted(topo.expressways.items()):
-        room = 0.0
-        for r in rs:
-            term = terminal(topo, r)
-            if term is None:
-                continue
-            forward = term == "end"
-            edges = g.out_edges(r, data=True) if forward else g.in_edges(r, data=True)
-            for u, v, d in edges:
-                pos = d.get("pos")
-                at_end = d["label"] in (Label.OUT_M, Label.IN_M) or (
-                    pos is not None and (pos >= 0.99 if forward else pos <= 0.01))
-                ramp = v if forward else u
-                if not at_end or ramp not in topo.ramps:
-                    continue
-                # the chain of ramps from this one away from the terminal
-                seen, todo, reached = set(), [ramp], set()
-                while todo:
-                    n = todo.pop()
-                    if n in seen:
-                        continue
-                    seen.add(n)
-                    nxt = g.successors(n) if forward else g.predecessors(n)
-                    for m in nxt:
-                        if m in exp_of:
-                            reached.add(exp_of[m])
-                        elif m in topo.ramps:
-                            todo.append(m)
-                dz = max([abs(level[x] - level[e]) for x in reached] or [0]) * st.level_height_m
-                ss = [slopes[n] for n in seen if slopes.get(n, 0.0) > 0]
-                if dz > 0 and ss:
-                    room = max(room, dz / (min(ss) / 100) + st.fit.transition_m)
-        if room > 0:
-            out[e] = room
-    return out
-
-
 def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
-                 terminal_extra: float | Mapping[str, float] = 0.0) -> dict[str, RoadLine]:
-    """Every carriageway of ``topo`` laid out (see the module doc); ``terminal_extra``
-    (m, or expressway → m: :func:`terminal_room`) moves the ends of those ending here
-    farther out."""
+                 terminal_extra: float = 0.0) -> dict[str, RoadLine]:
+    """Every carriageway of ``topo`` laid out (see the module doc)."""
     exps = topo.expressways
-    if not isinstance(terminal_extra, Mapping):
-        terminal_extra = {e: float(terminal_extra) for e in exps}
     term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
     order = sorted(exps, key=lambda e: (term_of[e], e))
     g = topo.graph
@@ -134,7 +69,8 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
 
     # each through expressway on its own level; the terminating ones (half lines in
     # directions of their own: they never meet) on the one above them all
-    level = road_levels(topo)
+    n_through = sum(not term_of[e] for e in exps)
+    level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
 
     def place(options: dict[str, float]) -> dict[str, RoadLine]:
         roads = {}
@@ -149,9 +85,9 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
                 term = terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
                 if term == "end":
-                    t_hi = -(other + st.terminal_m + terminal_extra.get(e, 0.0))
+                    t_hi = -(other + st.terminal_m + terminal_extra)
                 elif term == "start":
-                    t_lo = other + st.terminal_m + terminal_extra.get(e, 0.0)
+                    t_lo = other + st.terminal_m + terminal_extra
                 n = lanes.get(r, st.default_lanes)
                 roads[r] = RoadLine(r, e, int(n), k, k * st.level_height_m,
                                     (float(o[0]), float(o[1])), float(wrap(h)), t_lo, t_hi,

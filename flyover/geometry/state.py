@@ -18,7 +18,7 @@ from flyover.geometry.fit import Obstacles, RampFit, RampSpec
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.levels import LevelPlan
 from flyover.geometry.rails import AttachmentWindows
-from flyover.geometry.roads import layout_roads, terminal_room
+from flyover.geometry.roads import layout_roads
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
 from flyover.geometry.specs import RampSpecs
 from flyover.topology.model import Topology
@@ -33,8 +33,9 @@ class LayoutState:
                  features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
         self.topo, self.st, self.seed = topo, st, seed
         self.features = dict(features)
-        # a T's terminal is far enough out for the ramps attached there to climb
-        extra = terminal_room(topo, {r: f.slope_pct for r, f in features.items()}, st)
+        # a T's terminal is far enough out for a ramp to climb one level there
+        slopes = [f.slope_pct for f in features.values() if f.slope_pct > 0]
+        extra = st.level_height_m / (min(slopes) / 100) + st.fit.transition_m if slopes else 0.0
         self.roads = layout_roads(topo, lanes, st, extra)
         self.g = topo.graph
         self.moves = Movements(topo, self.roads)
