@@ -743,3 +743,32 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     monkeypatch.setattr(rails.AttachmentWindows, "room_round", lambda self, loop, stub: 0.0)
     monkeypatch.setattr(levels.LevelPlan, "round_room", lambda self, ramp: 0.0)
     assert over(build_interchange(t, lanes, feats, seed=2113364338))
+
+
+def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    c = Connection
+    # a 6-leg: A through, B, C and D end here (on level 1); z and w link B and D
+    # turning opposite ways
+    t = Topology.build(
+        "six_leg", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2", "D1", "D2")],
+        [Ramp(x) for x in "pqrsuvzw"],
+        [c("A1", "p", Label.OUT_R, 0.3), c("p", "B1", Label.IN_M),
+         c("B2", "q", Label.OUT_M), c("q", "A2", Label.IN_R, 0.7),
+         c("A2", "r", Label.OUT_R, 0.3), c("r", "C1", Label.IN_M),
+         c("C2", "s", Label.OUT_M), c("s", "A1", Label.IN_R, 0.7),
+         c("A1", "u", Label.OUT_R, 0.4), c("u", "D1", Label.IN_M),
+         c("D2", "v", Label.OUT_M), c("v", "A2", Label.IN_R, 0.8),
+         c("B2", "z", Label.OUT_R, 0.5), c("z", "D1", Label.IN_R, 0.5),
+         c("D2", "w", Label.OUT_R, 0.5), c("w", "B1", Label.IN_R, 0.5)])
+    st = LayoutSettings()
+    b = LayoutState(t, {}, {r: RampFeatures(150.0, 5.0) for r in t.ramps}, st, 0)
+    left = [r for r in "zw" if b.moves.movement(r) > 1.0]
+    right = [r for r in "zw" if b.moves.movement(r) < -1.0]
+    assert len(left) == len(right) == 1, {r: b.moves.movement(r) for r in "zw"}
+    z_roads = b.roads["B1"].z
+    assert z_roads == b.roads["D1"].z > 0
+    # the left crosses the ramps on B and D's level: over them
+    assert b.plan[left[0]] == pytest.approx(z_roads + st.level_height_m)
+    assert right[0] not in b.plan

@@ -9,7 +9,10 @@ the settings.
   lowest level ``clearance_m`` above the highest of them. Where left turns run
   both ways between two expressways they cross each other: those leaving the
   second expressway (a T's terminating one) go one level higher — the two
-  flyover levels of a four-level stack, the three levels of a directional T.
+  flyover levels of a four-level stack, the three levels of a directional T. A left
+  turn between two expressways that both end here (a 5-leg's, on one level) crosses
+  the ramps on that level and the flyovers leaving or joining it: its crest is the
+  lowest level ``clearance_m`` above that level and every other planned crest.
 * A stub feeding or fed by such a ramp ends ``clearance_m`` from its road
   toward that crest; if its other children (right turns) go on to a road (a
   turbine), no higher than ``clearance_m`` (and 0.5 m) under the lowest
@@ -60,11 +63,25 @@ class LevelPlan:
             raw = wrap(roads[b].heading - roads[a].heading)
             if raw > 1.0 and not self.moves.is_loop(ramp):
                 lefts[ramp] = (roads[a].expressway, roads[b].expressway)
-        plan = {}
+        ending = {r.expressway for r in roads.values()} - {r.expressway for r in through}
+        plan, between = {}, []
         for ramp, (ea, eb) in lefts.items():
+            if ea in ending and eb in ending:
+                between.append(ramp)
+                continue
             both_ways = (eb, ea) in lefts.values()
             k = roads[road_of(topo, ramp, False)].level if both_ways else 0
             plan[ramp] = float(levels[min(k, len(levels) - 1)])
+        # a left turn between two expressways ending here (on one level, a 5-leg's)
+        # crosses the ramps on that level and the flyovers leaving or joining it: over
+        # them all
+        top_plan = max(plan.values(), default=top)
+        for ramp in between:
+            za = max(roads[road_of(topo, ramp, f)].z for f in (False, True))
+            over = [z for z in st.levels_m
+                    if z >= max(za, top_plan) + st.fit.clearance_m - 1e-6]
+            if over:
+                plan[ramp] = float(over[0])
         return plan
 
     def low_connector(self, ramp: str) -> bool:

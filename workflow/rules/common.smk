@@ -135,7 +135,9 @@ def class_tables(stage):
 # 17: a ramp leaving / joining a ramp on a grade starts / ends at that grade (no kink); held to
 #     where its parent is no steeper than its slope target when no level part is in its window
 # 18: a stub whose child goes round a loop ends where it can; the loop keeps off that child's turn
-GEOMETRY_VERSION = 18
+# 19: a left turn between two expressways ending here (a 5-leg's) crests over every other
+#     planned crest (catalog unchanged)
+GEOMETRY_VERSION = 19
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
