@@ -365,6 +365,16 @@ def test_two_acceleration_lanes_close_one_after_the_other_on_stack4():
     assert _lanes_ending_together(xodr_bytes(catalog_geometry("stack4", 0))) == []
 
 
+def _right_lanes(data: bytes):
+    """(right ``<lane>`` element, its lane section's length) of every lane section of a file."""
+    for road in etree.parse(io.BytesIO(data)).getroot().iter("road"):
+        secs = road.findall("lanes/laneSection")
+        stops = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
+        for sec, stop in zip(secs, stops):
+            for lane in sec.findall("right/lane"):
+                yield lane, stop - float(sec.get("s"))
+
+
 def test_an_opening_lane_stops_widening_inside_its_lane_section_as_written():
     """CommonRoad's converter finds where a lane that opens from zero width reaches full
     width among the roots of its width's derivative no further than the lane section's
@@ -377,22 +387,16 @@ def test_an_opening_lane_stops_widening_inside_its_lane_section_as_written():
 
     from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
 
-    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("cloverleaf", 0)))).getroot()
     margins = []
-    for road in root.iter("road"):
-        secs = road.findall("lanes/laneSection")
-        ends = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
-        for sec, end in zip(secs, ends):
-            length = end - float(sec.get("s"))
-            for lane in sec.findall("right/lane"):
-                w = lane.findall("width")[0]
-                coef = [float(w.get(k)) for k in "abcd"]
-                if coef[0] != 0.0 or not any(coef[1:]):
-                    continue
-                seg = (float(lane.findall("width")[1].get("sOffset"))
-                       if len(lane.findall("width")) > 1 else length)
-                r = P.polyroots(P.polyder(coef)).real
-                margins.append(seg - max(r))
+    for lane, length in _right_lanes(xodr_bytes(catalog_geometry("cloverleaf", 0))):
+        w = lane.findall("width")[0]
+        coef = [float(w.get(k)) for k in "abcd"]
+        if coef[0] != 0.0 or not any(coef[1:]):
+            continue
+        seg = (float(lane.findall("width")[1].get("sOffset"))
+               if len(lane.findall("width")) > 1 else length)
+        r = P.polyroots(P.polyder(coef)).real
+        margins.append(seg - max(r))
     assert len(margins) >= 8
     assert min(margins) > 5e-5
 
@@ -405,19 +409,13 @@ def test_a_closing_lane_is_zero_wide_at_its_end_as_written():
     wide (``d`` = 1.46484375e-05 rounded)."""
     from flyover.clients.designs import catalog_geometry  # noqa: PLC0415
 
-    root = etree.parse(io.BytesIO(xodr_bytes(catalog_geometry("directional_t", 1)))).getroot()
     ends = []
-    for road in root.iter("road"):
-        secs = road.findall("lanes/laneSection")
-        stops = [float(x.get("s")) for x in secs[1:]] + [float(road.get("length"))]
-        for sec, stop in zip(secs, stops):
-            length = stop - float(sec.get("s"))
-            for lane in sec.findall("right/lane"):
-                w = lane.findall("width")[-1]
-                a, b, c, d = (float(w.get(k)) for k in "abcd")
-                t = length - float(w.get("sOffset"))
-                if a > 1.0 and abs(a + b * t + c * t * t + d * t ** 3) < 1e-3:
-                    ends.append(abs(a + b * t + c * t * t + d * t ** 3))
+    for lane, length in _right_lanes(xodr_bytes(catalog_geometry("directional_t", 1))):
+        w = lane.findall("width")[-1]
+        a, b, c, d = (float(w.get(k)) for k in "abcd")
+        t = length - float(w.get("sOffset"))
+        if a > 1.0 and abs(a + b * t + c * t * t + d * t ** 3) < 1e-3:
+            ends.append(abs(a + b * t + c * t * t + d * t ** 3))
     assert len(ends) >= 4
     assert max(ends) < 1e-8
 
