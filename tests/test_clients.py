@@ -18,7 +18,10 @@ from flyover.opendrive.reader import read_xodr
 from flyover.opendrive.validate import movements
 from tests.clients_support import LEVELS_APART_M, TOLERANCE_M, check_verifier, clients_python, write_design  # noqa: F401
 
-#: movements Lanelet2 does not route (design, feature set). j1, both feature sets: r3
+#: movements Lanelet2 may fail to route (design, feature set). j1 at geometry version 16, both
+#: feature sets, lost R2→R4 (since version 17's profiles it routes it: which merge loses
+#: depends on the conversion's order and the roads' shape, so the test allows, and does not
+#: require, the loss; the file with nodes shared by position must route it either way): r3
 #: (R2→R4) and r2 merge at junction 1007 side by side into road 28 (lanes -2 and -1). In
 #: CommonRoad's map r3's lanelet (30 on feature set 1, 24 on 0) has road 28's lane -2 as
 #: its successor, its boundary ends on that lanelet's; the Lanelet2 export of
@@ -191,21 +194,22 @@ def test_every_catalog_design_passes_every_client(tmp_path, clients_python, name
     back), Lanelet2 (load, routing graph, routes), pyopendrive and pyxodr. CommonRoad's map
     verifier is in ``test_clients_verifier_*.py`` (feature set 0) and the opt-in test below."""
     g, path = _write(tmp_path, name, variant)
-    misses = LANELET2_MISSES.get((name, variant), set())
+    allowed = LANELET2_MISSES.get((name, variant), set())
     [a] = run_clients([{"xodr": path, "commonroad": tmp_path / "m.xml",
                         "lanelet2": tmp_path / "m.osm", "verify": False, "routing": True,
-                        "lanelet2_shared_nodes": tmp_path / "shared.osm" if misses else None,
+                        "lanelet2_shared_nodes": tmp_path / "shared.osm" if allowed else None,
                         "pyopendrive": True, "pyxodr": True}], python=clients_python)
     assert a["conversion"]["ok"], a["conversion"]
     assert a["commonroad"]["ok"] and a["lanelet2"]["ok"] and a["lanelet2"]["routing_errors"] == []
     assert max(gap for *_, gap in link_gaps(read_xodr(path))) < TOLERANCE_M
     assert a["pyopendrive"]["ok"] and a["pyxodr"]["ok"]
     routed, wanted = set(routed_movements(a["lanelet2"], read_xodr(path))), set(movements(g))
-    assert wanted - routed == misses
+    misses = wanted - routed
+    assert misses <= allowed
     extra = routed - wanted  # only U-turns: two movements in a row through a weave
     assert set(two_movement_trips(extra, wanted)) == extra
-    if misses:  # the converter's doing: with its nodes shared by position, exactly the misses
-        b = a["lanelet2_shared_nodes"]  # come back
+    if allowed:  # the converter's doing: with its nodes shared by position, every movement
+        b = a["lanelet2_shared_nodes"]  # routes (the misses come back) and no other one
         assert b["ok"] and b["routing_errors"] == [], b
         assert set(routed_movements(b, read_xodr(path))) == routed | misses
 
