@@ -544,11 +544,6 @@ def _weaves(piece: _Piece, L: float, opts: ExportOptions) -> bool:
             and L <= opts.weave_max_m)
 
 
-def _aux_count(region: tuple | None) -> int:
-    """Auxiliary lanes a region closes (opens) one after the other: 0 if it is no auxiliary region."""
-    return region[2] if region is not None and region[0] == "aux" else 0
-
-
 def _taper_count(el: _Element, region: tuple | None) -> int:
     """Tapers a region of a normal piece takes, one after the other (at least 1 if any).
 
