@@ -1,0 +1,195 @@
+"""Pointwise radius of the ramps' lane centre lines against their radius targets.
+
+The fit holds a ramp's radius over 10 m (:data:`flyover.geometry._kernels.HOLD_M`); a
+vehicle follows the curvature at every point. This script measures, independently of the
+fit, the **pointwise** radius of each ramp's lane centre: the curvature of each cubic
+Bézier piece of ``geometry.json``'s plan, evaluated analytically at ``--per-piece``
+parameter values per piece (default 2,000), offset to the lane centre (half the ramp's
+lane width right of its reference line: ``|1/κ + w/2|``), its least value over the whole
+ramp (nothing excluded: the straight leads have none). Target: its radius target, or
+for an ``inf`` target the floor the fit holds it to (``geometry.inf_min_radius_m``).
+
+Per design it prints the share of ramps whose pointwise minimum is below 0.5 × and below
+0.95 × the target, where the minimum lies (``start``: the ramp's first curved point, at
+its start or at the end of its straight lead; ``end`` likewise; ``join``: a joint between
+two Bézier pieces; ``body``: inside a piece, more than ``--near`` metres from those), and
+the share *within 5 % pointwise*: held radius within 5 % of the target (the fit's
+measure, re-measured here) and nowhere tighter than 0.95 × the target.
+
+With ``--xodr N`` it cross-checks the first N ramps of each design (and the ramps
+``--show`` lists) on the exported
+OpenDRIVE (written and read back, :mod:`flyover.opendrive`): the centre of the ramp's own
+lanes (followed through the lane links, :func:`benchmarks.geometry.lane_centre_runs`),
+sampled every 0.1 m; radius as heading change over arc length held over 2 m.
+
+Input: directories of ``{class_id}/{sample}/geometry.json`` (``benchmarks/geometry.py
+--keep DIR`` writes them; ``results/interchanges`` is the workflow's).
+
+Run: ``PYTHONPATH=. .venv/bin/python benchmarks/pointwise_radius.py /tmp/pr18/before``
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from flyover.config import load_config
+from flyover.geometry.model import InterchangeGeometry
+from flyover.topology.canonical import class_id as class_id_of
+from flyover.topology.catalog import catalog_topologies
+
+WHERE = ("start", "end", "join", "body")
+
+
+def piece_curvature(p: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Signed curvature and arc length (from the piece's start) at ``m`` parameter values of
+    the cubic with control points ``p`` ``(4, 2)``."""
+    t = np.linspace(0.0, 1.0, m)[:, None]
+    u = 1.0 - t
+    d1 = 3 * (u * u * (p[1] - p[0]) + 2 * u * t * (p[2] - p[1]) + t * t * (p[3] - p[2]))
+    d2 = 6 * (u * (p[2] - 2 * p[1] + p[0]) + t * (p[3] - 2 * p[2] + p[1]))
+    speed = np.hypot(d1[:, 0], d1[:, 1])
+    kap = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / np.maximum(speed, 1e-12) ** 3
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) / (m - 1))])
+    return kap, s
+
+
+def pointwise(ramp, width_m: float, m: int, near_m: float, hold_m: float = 10.0) -> dict:
+    """A ramp's pointwise minimum lane-centre radius, where it lies, and its held radius."""
+    kaps, ss, joints, straight = [], [], [0.0], []
+    off = 0.0
+    for piece in ramp.plan:
+        p = np.asarray(piece.p, float)
+        kap, s = piece_curvature(p, m)
+        kaps.append(kap)
+        ss.append(s + off)
+        off += s[-1]
+        joints.append(off)
+        straight.append(bool(np.all(np.abs(kap) < 1e-12)))
+    kap, s = np.concatenate(kaps), np.concatenate(ss)
+    with np.errstate(divide="ignore"):
+        r = np.where(kap == 0.0, np.inf, np.abs(1.0 / kap + 0.5 * width_m))
+    i = int(np.argmin(r))
+    curved = [k for k, st in enumerate(straight) if not st] or [0]
+    first, last = joints[curved[0]], joints[curved[-1] + 1]
+    at = float(s[i])
+    if abs(at - first) <= near_m:
+        where = "start"
+    elif abs(at - last) <= near_m:
+        where = "end"
+    elif min(abs(at - j) for j in joints) <= near_m:
+        where = "join"
+    else:
+        where = "body"
+    # held radius (mean curvature over hold_m, as flyover.geometry.bezier.held_radius)
+    turn = np.concatenate([[0.0], np.cumsum(0.5 * (kap[1:] + kap[:-1]) * np.diff(s))])
+    hold = min(hold_m, 0.999 * float(s[-1]))
+    k = np.searchsorted(s, s + hold, side="left")
+    ok = k < len(s)
+    j = np.flatnonzero(ok)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kh = (turn[k[ok]] - turn[j]) / np.maximum(s[k[ok]] - s[j], 1e-9)
+        rh = np.where(kh == 0.0, np.inf, np.abs(1.0 / kh + 0.5 * width_m))
+    return {"r_point": float(r[i]), "where": where, "s": at, "length": float(s[-1]),
+            "r_held": float(rh.min()) if len(rh) else math.inf}
+
+
+def xodr_min_radius(geometry, step_m: float = 0.1, hold_m: float = 2.0) -> dict[str, float]:
+    """Ramp id → the least radius of the centre of its own lanes in the exported .xodr,
+    held over ``hold_m`` (heading change over arc length), sampled every ``step_m``."""
+    from benchmarks.geometry import held_radius_xy, lane_centre_runs  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.writer import xodr_bytes  # noqa: PLC0415
+
+    net = read_xodr(io.BytesIO(xodr_bytes(geometry)))
+    out = {}
+    for name, (runs, _) in lane_centre_runs(geometry, net, step_m=step_m).items():
+        out[name] = min([held_radius_xy(xy, hold_m, step_m) for xy in runs[0]] + [math.inf])
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dirs", nargs="+", type=Path)
+    ap.add_argument("--per-piece", type=int, default=2000)
+    ap.add_argument("--near", type=float, default=3.0,
+                    help="metres from a joint within which a minimum counts as at it")
+    ap.add_argument("--xodr", type=int, default=0,
+                    help="cross-check this many ramps per design on the exported .xodr")
+    ap.add_argument("--show", type=int, default=0, help="list this many ramps below 0.95")
+    args = ap.parse_args()
+    cfg = load_config("config/config.yaml")
+    floor = float(cfg["geometry"].get("inf_min_radius_m", 30.0))
+    names = {class_id_of(t): n for n, t in catalog_topologies().items()}
+    rows = []
+    for d in args.dirs:
+        for path in sorted(d.glob("*/*/geometry.json")):
+            g = InterchangeGeometry.from_json(path.read_text())
+            for ramp in g.ramps:
+                w = ramp.lanes * g.ramp_lane_width_m
+                t = ramp.target_radius_m
+                target = floor if math.isinf(t) else t
+                row = pointwise(ramp, w, args.per_piece, args.near)
+                row.update(design=names.get(g.class_id, g.class_id), sample=g.sample,
+                           ramp=ramp.id, target=target, inf=math.isinf(t), ok=ramp.ok,
+                           path=path)
+                rows.append(row)
+    by: dict[str, list[dict]] = {}
+    for r in rows:
+        by.setdefault(r["design"], []).append(r)
+    print(f"pointwise lane-centre radius (analytic, {args.per_piece} points per Bezier piece) "
+          "against the target (inf: the floor)")
+    print(f"{'design':<18}{'ramps':>6}{'<0.5':>7}{'<0.95':>7}   <0.95 at start/end/join/body"
+          f"{'held 5%':>10}{'held 5% & pw':>14}")
+
+    def line(name, rs):
+        n = len(rs)
+        half = sum(r["r_point"] < 0.5 * r["target"] for r in rs)
+        low = [r for r in rs if r["r_point"] < 0.95 * r["target"]]
+        wh = "/".join(str(sum(r["where"] == w for r in low)) for w in WHERE)
+        held = [r for r in rs if (r["r_held"] >= 0.95 * r["target"] if r["inf"]
+                                  else abs(r["r_held"] - r["target"]) <= 0.05 * r["target"])]
+        both = [r for r in held if r["r_point"] >= 0.95 * r["target"]]
+        print(f"{name:<18}{n:6d}{100 * half / n:6.1f}%{100 * len(low) / n:6.1f}%   "
+              f"{wh:<26}{100 * len(held) / n:9.1f}%{100 * len(both) / n:13.1f}%")
+
+    for name, rs in sorted(by.items()):
+        line(name, rs)
+    line("total", rows)
+    half_where = [r["where"] for r in rows if r["r_point"] < 0.5 * r["target"]]
+    print("below 0.5 x target, at start/end/join/body: "
+          + "/".join(str(half_where.count(w)) for w in WHERE))
+    low = sorted((r for r in rows if r["r_point"] < 0.95 * r["target"]),
+                 key=lambda r: r["r_point"] / r["target"])
+    for r in low[: args.show]:
+        print(f"  {r['design']} {r['sample']} {r['ramp']}: pointwise {r['r_point']:.1f} m at "
+              f"{r['s']:.1f} of {r['length']:.0f} m ({r['where']}), held {r['r_held']:.1f}, "
+              f"target {r['target']:g}{' (inf)' if r['inf'] else ''}, ok {r['ok']}")
+    # cross-check: the first --xodr ramps of each design's first sample, and the ramps listed
+    xs, seen = [], {}
+    for r in rows:
+        if seen.get(r["design"], 0) < args.xodr and r["sample"] == min(
+                q["sample"] for q in rows if q["design"] == r["design"]):
+            seen[r["design"]] = seen.get(r["design"], 0) + 1
+            xs.append(r)
+    xs += [r for r in low[: args.show] if r not in xs] if args.xodr else []
+    cache: dict[Path, dict] = {}
+    for r in xs:
+        if r["path"] not in cache:
+            cache[r["path"]] = xodr_min_radius(
+                InterchangeGeometry.from_json(r["path"].read_text()))
+        r["xodr"] = cache[r["path"]].get(r["ramp"], math.nan)
+    if xs:
+        print("cross-check on the exported .xodr (own lanes' centre, every 0.1 m, radius held "
+              "over 2 m) against the analytic pointwise minimum:")
+        for r in xs:
+            print(f"  {r['design']:<17} {r['sample']:3d} {r['ramp']:<6} target {r['target']:6g}"
+                  f"  pointwise {r['r_point']:8.1f}  xodr {r['xodr']:8.1f}")
+
+
+if __name__ == "__main__":
+    main()
