@@ -661,7 +661,7 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z,
 #: its radius target (``inf``: the floor) less this share: 3 %, within the 5 % tolerance,
 #: so that the final dense measurement (points between the search's samples) stays
 #: within it too
-POINT_MARGIN = 0.03
+POINT_MARGIN = 0.045
 #: weight of the pointwise term (``spike``: the share the tightest point falls short)
 SPIKE_WEIGHT = 10.0
 
