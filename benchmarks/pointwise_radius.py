@@ -22,6 +22,9 @@ OpenDRIVE (written and read back, :mod:`flyover.opendrive`): the centre of the r
 lanes (followed through the lane links, :func:`benchmarks.geometry.lane_centre_runs`),
 sampled every 0.1 m; radius as heading change over arc length held over 2 m.
 
+``--continuity``: every interchange is exported and its lane links checked
+(:func:`flyover.opendrive.continuity.check_continuity`: 1 cm, 0.5°).
+
 Input: directories of ``{class_id}/{sample}/geometry.json`` (``benchmarks/geometry.py
 --keep DIR`` writes them; ``results/interchanges`` is the workflow's).
 
@@ -112,6 +115,15 @@ def xodr_min_radius(geometry, step_m: float = 0.1, hold_m: float = 2.0) -> dict[
     return out
 
 
+def continuity(geometry) -> tuple[bool, str]:
+    """The lane-link continuity check of the exported .xodr of ``geometry``."""
+    from flyover.opendrive.continuity import check_continuity  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.writer import xodr_bytes  # noqa: PLC0415
+
+    return check_continuity(read_xodr(io.BytesIO(xodr_bytes(geometry))))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dirs", nargs="+", type=Path)
@@ -121,14 +133,24 @@ def main() -> None:
     ap.add_argument("--xodr", type=int, default=0,
                     help="cross-check this many ramps per design on the exported .xodr")
     ap.add_argument("--show", type=int, default=0, help="list this many ramps below 0.95")
+    ap.add_argument("--continuity", action="store_true",
+                    help="also export every interchange and count those failing the lane-link "
+                         "continuity check (flyover.opendrive.continuity, 1 cm / 0.5 deg)")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
     floor = float(cfg["geometry"].get("inf_min_radius_m", 30.0))
     names = {class_id_of(t): n for n, t in catalog_topologies().items()}
     rows = []
+    broken: list[str] = []
+    n_ic = 0
     for d in args.dirs:
         for path in sorted(d.glob("*/*/geometry.json")):
             g = InterchangeGeometry.from_json(path.read_text())
+            n_ic += 1
+            if args.continuity:
+                ok, detail = continuity(g)
+                if not ok:
+                    broken.append(f"{names.get(g.class_id, g.class_id)} {g.sample}: {detail}")
             for ramp in g.ramps:
                 w = ramp.lanes * g.ramp_lane_width_m
                 t = ramp.target_radius_m
@@ -169,6 +191,10 @@ def main() -> None:
         print(f"  {r['design']} {r['sample']} {r['ramp']}: pointwise {r['r_point']:.1f} m at "
               f"{r['s']:.1f} of {r['length']:.0f} m ({r['where']}), held {r['r_held']:.1f}, "
               f"target {r['target']:g}{' (inf)' if r['inf'] else ''}, ok {r['ok']}")
+    if args.continuity:
+        print(f"interchanges failing the continuity check of their .xodr: {len(broken)} of {n_ic}")
+        for b in broken:
+            print(f"  {b}")
     # cross-check: the first --xodr ramps of each design's first sample, and the ramps listed
     xs, seen = [], {}
     for r in rows:
