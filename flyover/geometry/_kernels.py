@@ -658,7 +658,7 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z,
 
 
 #: the search holds a ramp's lane centre nowhere tighter (pointwise, at its samples) than
-#: its radius target (``inf``: the floor) less this share: 3 %, within the 5 % tolerance,
+#: its radius target (``inf``: the floor) less this share: 4.5 %, within the 5 % tolerance,
 #: so that the final dense measurement (points between the search's samples) stays
 #: within it too
 POINT_MARGIN = 0.045

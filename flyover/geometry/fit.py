@@ -33,7 +33,7 @@ of the reference line), to the tightest radius it *holds* over
 :data:`flyover.geometry._kernels.HOLD_M` (10 m) of arc: a curve tight only for a
 few metres does not count as turning at that radius. It must not be tighter than that
 either: the lane centre is nowhere (pointwise) tighter than 95 % of the target (the
-search: 97 %, :data:`flyover.geometry._kernels.POINT_MARGIN`), since a vehicle follows the
+search: 95.5 %, :data:`flyover.geometry._kernels.POINT_MARGIN`), since a vehicle follows the
 curvature at every point (a short end leg of a cubic can turn at a tenth of the target
 for a metre or two, and the exported road shows it as a heading step at a link).
 A target of ``inf`` on a ramp that has to turn means

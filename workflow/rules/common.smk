@@ -138,7 +138,7 @@ def class_tables(stage):
 # 19: a left turn between two expressways ending here (a 5-leg's) crests over every other
 #     planned crest (catalog unchanged)
 # 20: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
-#     (the search: 97 %); before, only the radius held over 10 m was (short end legs and
+#     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
 GEOMETRY_VERSION = 20
 
