@@ -138,9 +138,8 @@ def class_tables(stage):
 # 19: a left turn between two expressways ending here (a 5-leg's) crests over every other
 #     planned crest (catalog unchanged)
 # 20: a collector road of split stubs whose loop goes to the road it crosses (Columbus
-#     09) passes under it, ends past it beside its own road, level after its first stub;
-#     ramps between two roads at one height (a 5-leg's, DC 26) are level ramps (slope 0);
-#     catalog unchanged
+#     09) passes under it, ends past it beside its own road, level after its first stub
+#     (a level ramp, never lifted); catalog unchanged
 GEOMETRY_VERSION = 20
 
 
