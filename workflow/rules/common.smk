@@ -137,7 +137,10 @@ def class_tables(stage):
 # 18: a stub whose child goes round a loop ends where it can; the loop keeps off that child's turn
 # 19: a left turn between two expressways ending here (a 5-leg's) crests over every other
 #     planned crest (catalog unchanged)
-GEOMETRY_VERSION = 19
+# 20: a collector road of split stubs whose loop goes to the road it crosses (Columbus
+#     09) passes under it, ends past it beside its own road, level after its first stub
+#     (a level ramp, never lifted); catalog unchanged
+GEOMETRY_VERSION = 20
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
