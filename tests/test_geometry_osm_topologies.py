@@ -91,3 +91,33 @@ def test_a_collector_roads_stubs_pass_under_the_road_its_loop_goes_to_and_go_on_
     assert b.spec("e", feats["e"]).free.z <= b.roads["B2"].z - st.fit.clearance_m - Z_MARGIN
     assert level_ramps(t) == {"c"}
     assert fixed_features(t) == {("c", Feature.SLOPE_PCT): 0.0}
+
+
+def test_a_ramp_merging_along_a_stub_adds_a_lane_beside_it_in_plan_and_in_the_file():
+    """Columbus's r5 (a loop off I-70) merges into the collector road r13 halfway along it,
+    before r13 splits at its free end. The layout put r5's end over r13's outer lane (as a
+    join at a free start would be) while the writer's lane links add a lane beside r13
+    there: the exported lanes were 4.0 m (one lane) off at that link. A merge along a
+    stub's body now adds a lane in both (here m into c, on the synthetic 4-leg)."""
+    from io import BytesIO  # noqa: PLC0415
+
+    from flyover.opendrive.continuity import check_continuity  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.writer import xodr_bytes  # noqa: PLC0415
+
+    c = Connection
+    t = Topology.build(
+        "collector_merge", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2")],
+        [Ramp(x) for x in "eckmxy"],
+        [c("A1", "e", Label.OUT_R, 0.3), c("e", "c", Label.OUT_L), c("e", "x", Label.OUT_R),
+         c("c", "k", Label.OUT_R), c("c", "y", Label.OUT_L), c("k", "B2", Label.IN_R, 0.4),
+         c("x", "B1", Label.IN_R, 0.6), c("y", "A1", Label.IN_R, 0.9),
+         c("B2", "m", Label.OUT_R, 0.2), c("m", "c", Label.IN_R)])
+    feats = {r: RampFeatures(60.0, 4.0) for r in t.ramps}
+    g = build_interchange(t, {}, feats).geometry
+    m = next(r for r in g.ramps if r.id == "m")
+    st = LayoutSettings()
+    c_width = next(r for r in g.ramps if r.id == "c").lanes * st.ramp_lane_width_m
+    assert m.end.parent == "c" and m.end.offset_m == pytest.approx(-c_width)
+    ok, detail = check_continuity(read_xodr(BytesIO(xodr_bytes(g))))
+    assert ok, detail

@@ -140,7 +140,7 @@ def class_tables(stage):
 # 20: a collector road of split stubs whose loop goes to the road it crosses (Columbus
 #     09) passes under it, ends past it beside its own road, level after its first stub
 #     (a level ramp, never lifted); catalog unchanged
-GEOMETRY_VERSION = 20
+GEOMETRY_VERSION = 21; 21: a ramp merging along a stub's body (not at its free start) adds a lane beside it, as the writer's lane links do (Columbus r5 into r13 was laid over r13's outer lane: lanes 4 m off in the file)
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
