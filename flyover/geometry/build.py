@@ -115,7 +115,9 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
         tried.append(fit)
         if fit.conflicts == 0:
             break
-        higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6]
+        # a level ramp (slope target 0) is never lifted: it would climb a wall
+        higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6
+                  and spec.target_slope_pct > 0]
         if not higher or (len(tried) > 1 and fit.conflicts >= tried[-2].conflicts):
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])

@@ -8,7 +8,9 @@ case is known from the topology alone, before anything is fitted:
 collector-distributor road, e.g. ``cA1`` of the catalog's ``cloverleaf_cd``,
 which leaves a carriageway and rejoins it) is kept at that road's level by the
 layout (:mod:`flyover.geometry.layout`): both ends at one height, nothing to
-climb over. No sampled maximum slope (1..5 % in the paper's profile) can be
+climb over. So is a collector road's second stub, which goes on at the height of
+the first under (over) the road its loop goes to (Columbus I-70 / I-270's ``r13``;
+:meth:`flyover.geometry.levels.LevelPlan.continues_level`; no catalog design has one). No sampled maximum slope (1..5 % in the paper's profile) can be
 met on it, so the slope of such a ramp is not a parameter of the covering
 array: it is *fixed* at 0 in every feature set (:func:`fixed_features`, used
 as ``fixed=`` of :func:`flyover.sampling.sample.sample_topology`).
@@ -104,7 +106,10 @@ TURNING_RAD = 0.5
 
 
 def level_ramps(topology: Topology) -> frozenset[str]:
-    """The ramps the layout necessarily keeps level: both ends on one road.
+    """The ramps the layout necessarily keeps level: both ends on one road, and a
+    collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
+    on the road layout of :mod:`flyover.geometry.roads`, which does not depend on the
+    sample).
 
     Parameters
     ----------
@@ -115,14 +120,21 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     -------
     frozenset of str
         Ramp ids whose start (``Out-*``) and end (``In-*``) attach to the same
-        road, e.g. collector-distributor roads.
+        road, e.g. collector-distributor roads, and split stubs that go on level.
     """
     g = topology.graph
     out = set()
+    stubs = []
     for ramp in topology.ramps:
         start, end = _ends(topology, ramp)
+        if start and end is None and g.nodes[start[0]]["kind"] is Kind.RAMP:
+            stubs.append(ramp)
         if start and end and start[0] == end[0] and g.nodes[start[0]]["kind"] is Kind.ROAD:
             out.add(ramp)
+    if stubs:  # a collector road's second stub goes on level
+        st = LayoutSettings()
+        plan = LevelPlan(Movements(topology, layout_roads(topology, {}, st)), {}, st)
+        out |= {ramp for ramp in stubs if plan.continues_level(ramp)}
     return frozenset(out)
 
 

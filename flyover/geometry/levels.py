@@ -17,6 +17,11 @@ the settings.
   toward that crest; if its other children (right turns) go on to a road (a
   turbine), no higher than ``clearance_m`` (and 0.5 m) under the lowest
   planned crest, so that they pass under every flyover.
+* A chain of split stubs one of which splits into a loop to a road crossing the one the
+  chain comes from (Columbus's collector road ``r8``, ``r13`` beside I-270, whose loop
+  ``r6`` goes to I-70) passes under (over) that road first: its stubs end ``clearance_m``
+  and a margin below (above) it, and a stub splitting off such a stub goes on at its
+  height (:meth:`LevelPlan.loop_road_z`, :meth:`LevelPlan.continues_level`).
 * A planned ramp's road ends, and those of a ramp it leaves or joins, keep room
   from the crossing to climb to (descend from) the crest at the ramp's slope.
 * A stub one of whose children is a loop's outer connector (a cloverstack's ``eA1``,
@@ -109,6 +114,39 @@ class LevelPlan:
             # they are fitted after the flyovers (they go on to a road): keep them under
             z = min(z, min(self.crests.values()) - clear - Z_MARGIN)
         return float(z) if z > z_road + 0.25 else float(min(c, z_road + clear))
+
+    def loop_road_z(self, ramp: str) -> float | None:
+        """The height of the road a loop splitting off ``ramp``'s chain goes to (a child
+        of ``ramp``, or of a split stub splitting off it: Columbus's ``r6`` off ``r13``
+        off ``r8``), if that road crosses the road the chain comes from: the chain passes
+        under (over) it before the loop leaves it, so its stubs end ``clearance_m`` (and
+        a margin) below (above) it. ``None`` otherwise."""
+        src = road_of(self.moves.topo, ramp, False)
+        if not src or src not in self.roads:
+            return None
+        for kid in self.moves.kids(ramp):
+            a, b = ends(self.moves.topo, kid)
+            if a is None or a[0] != ramp:
+                continue
+            if b is None:
+                z = self.loop_road_z(kid)
+                if z is not None:
+                    return z
+            elif self.moves.is_loop(kid) and b[0] in self.roads \
+                    and self.roads[b[0]].expressway != self.roads[src].expressway:
+                return float(self.roads[b[0]].z)
+        return None
+
+    def continues_level(self, ramp: str) -> bool:
+        """A split stub splitting off a split stub whose chain passes under (over) the road
+        of a loop leaving it (:meth:`loop_road_z`): the two are one collector road, which
+        goes on at the height its first stub reached (Columbus's ``r13`` after ``r8``); it
+        is a level ramp (:func:`flyover.geometry.feasibility.level_ramps`)."""
+        start, end = ends(self.moves.topo, ramp)
+        if end is not None or start is None or start[0] in self.roads:
+            return False
+        p_start, p_end = ends(self.moves.topo, start[0])
+        return p_end is None and self.loop_road_z(ramp) is not None
 
     def kids_room(self, kids: list[str], z: float, turning: bool = True) -> float:
         """Room a ramp leaves toward the crossing for the ramps leaving or joining it

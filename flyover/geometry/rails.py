@@ -224,10 +224,13 @@ class AttachmentWindows:
         length = st["s"][-1]
         pw = self.fitted.width[parent]
         p_start, p_end = ends(self.topo, parent)
+        # at a stub's free end the child takes over the stub's outer lanes (a fork or
+        # join); anywhere else along a ramp it adds a lane beside it
+        at_free_end = (is_start and p_end is None) or (not is_start and p_start is None)
         if label.side == "right":
-            off = -pw if (p_end is not None and p_start is not None) else -(pw - width)
+            off = -(pw - width) if at_free_end else -pw
         else:
-            off = width if (p_end is not None and p_start is not None) else 0.0
+            off = 0.0 if at_free_end else width
         if is_start and p_end is None:
             lo = hi = length
         elif not is_start and p_start is None:

@@ -315,7 +315,10 @@ def _snap_ramps(g: InterchangeGeometry, els: dict[str, _Element], opts: ExportOp
             elif not at_start and abs(s_att) <= 0.5:
                 s_att = 0.0
             x, y, h = par.pose(s_att)
-            fork = att.parent in free_end or att.parent in free_start
+            # a diverge from a ramp with a free end is a fork there (a merge into one with a
+            # free start a join); a merge along the body of a stub adds a lane beside it
+            fork = (att.parent in free_end and at_start) or \
+                (att.parent in free_start and not at_start)
             if side == "M":
                 off = 0.0
             elif fork:

@@ -1,0 +1,123 @@
+"""Real-world topologies the catalog does not have: geometry on their shapes.
+
+Columbus I-70 / I-270 (../shared/osm/09, ODbL: read in place where that folder
+exists, never copied; skipped elsewhere) and a synthetic 4-leg with its collector road
+(no extract needed).
+"""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flyover.geometry.build import _fit_with_levels
+from flyover.geometry.feasibility import fixed_features, level_ramps
+from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
+from flyover.geometry.settings import Z_MARGIN
+from flyover.geometry.state import LayoutState
+from flyover.sampling.model import Feature
+from flyover.topology.model import Connection, Label, Ramp, Road, Topology
+
+#: the team's shared extracts: FLYOVER_OSM_DIR, else ../shared/osm beside the checkout
+OSM_DIR = Path(os.environ.get("FLYOVER_OSM_DIR")
+               or Path(__file__).resolve().parents[2] / "shared" / "osm")
+COLUMBUS = OSM_DIR / "09_us_oh_columbus_i70_i270_west.osm"
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_a_collector_road_splitting_into_a_loop_ends_past_the_road_the_loop_goes_to():
+    """Columbus: the collector road r13 leaves the stub r8 (off I-270 North, before I-70)
+    on its left and splits into the loop r6 to I-70 West and r12. Its free end was placed
+    60 m or more out, 3-40 m to the left of where r8 ended (toward I-270 North), at a
+    third of the way up to its children's roads: it ended under I-70 (1.7 m below a
+    6.5 m road) or across I-270, and r6 started there, in I-270 North's lanes (a 64 m
+    same-level conflict). Now the chain stays low enough to pass under I-70 (r13 goes on
+    level at r8's height, a level ramp), r13 ends past it by the loop's room and beside
+    I-270 North, wherever in its ranges."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    assert {"r8", "r13", "r6"} <= set(topo.ramps)
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    b = LayoutState(topo, {}, feats, st, 0)
+    low = b.roads["I70W"].z - st.fit.clearance_m - Z_MARGIN + 1e-9
+    spec8 = b.spec("r8", feats["r8"])
+    assert spec8.free.z <= low
+    assert max(map(abs, spec8.free.turn)) <= 0.1 + 1e-12  # it ends along I-270
+    fit, _, _ = _fit_with_levels(b, spec8, 1)
+    b.record("r8", fit)
+    spec = b.spec("r13", feats["r13"])
+    assert spec.free.z == pytest.approx(fit.end_pose[3], abs=1e-6)  # one road: level
+    assert "r13" in level_ramps(topo)
+    # every free end r13's ranges allow, from where it starts (r8's free end)
+    x0, y0, h, _ = fit.end_pose
+    ys, xs = [], []
+    for d in spec.free.forward:
+        for e in spec.free.lateral:
+            xs.append(x0 + d * np.cos(h) - e * np.sin(h))
+            ys.append(y0 + d * np.sin(h) + e * np.cos(h))
+    i70w, i270n = b.roads["I70W"], b.roads["I270N"]
+    # past I-70 (it runs east-west, I-270 north) by 60 m (the loop's radius) and more
+    assert min(ys) >= i70w.origin[1] + i70w.half_width + 60.0
+    # right of I-270 North's band, by half r13's width
+    edge = i270n.origin[0] + i270n.lanes * st.lane_width_m
+    assert min(xs) >= edge + 0.5 * b.width["r13"]
+
+
+def _collector_loop():
+    """A 4-leg with Columbus's collector road: e leaves A1 before the crossing and splits
+    into x (right turn to B1) and c, which goes on beside A1, under B, and splits into the
+    loop k to B2 and y back to A1."""
+    c = Connection
+    return Topology.build(
+        "collector_loop", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2")],
+        [Ramp(x) for x in "eckxy"],
+        [c("A1", "e", Label.OUT_R, 0.3), c("e", "c", Label.OUT_L), c("e", "x", Label.OUT_R),
+         c("c", "k", Label.OUT_R), c("c", "y", Label.OUT_L), c("k", "B2", Label.IN_R, 0.4),
+         c("x", "B1", Label.IN_R, 0.6), c("y", "A1", Label.IN_R, 0.9)])
+
+
+def test_a_collector_roads_stubs_pass_under_the_road_its_loop_goes_to_and_go_on_level():
+    """Both stubs of the collector road end under B (clearance and a margin below it), the
+    second one level (its slope fixed at 0, not drawn: no slope target can be met on it)."""
+    t = _collector_loop()
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, st, 0)
+    assert b.moves.is_loop("k")
+    assert b.levels.loop_road_z("e") == b.levels.loop_road_z("c") == b.roads["B2"].z > 0
+    assert b.spec("e", feats["e"]).free.z <= b.roads["B2"].z - st.fit.clearance_m - Z_MARGIN
+    assert level_ramps(t) == {"c"}
+    assert fixed_features(t) == {("c", Feature.SLOPE_PCT): 0.0}
+
+
+def test_a_ramp_merging_along_a_stub_adds_a_lane_beside_it_in_plan_and_in_the_file():
+    """Columbus's r5 (a loop off I-70) merges into the collector road r13 halfway along it,
+    before r13 splits at its free end. The layout put r5's end over r13's outer lane (as a
+    join at a free start would be) while the writer's lane links add a lane beside r13
+    there: the exported lanes were 4.0 m (one lane) off at that link. A merge along a
+    stub's body now adds a lane in both (here m into c, on the synthetic 4-leg)."""
+    from io import BytesIO  # noqa: PLC0415
+
+    from flyover.opendrive.continuity import check_continuity  # noqa: PLC0415
+    from flyover.opendrive.reader import read_xodr  # noqa: PLC0415
+    from flyover.opendrive.writer import xodr_bytes  # noqa: PLC0415
+
+    c = Connection
+    t = Topology.build(
+        "collector_merge", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2")],
+        [Ramp(x) for x in "eckmxy"],
+        [c("A1", "e", Label.OUT_R, 0.3), c("e", "c", Label.OUT_L), c("e", "x", Label.OUT_R),
+         c("c", "k", Label.OUT_R), c("c", "y", Label.OUT_L), c("k", "B2", Label.IN_R, 0.4),
+         c("x", "B1", Label.IN_R, 0.6), c("y", "A1", Label.IN_R, 0.9),
+         c("B2", "m", Label.OUT_R, 0.2), c("m", "c", Label.IN_R)])
+    feats = {r: RampFeatures(60.0, 4.0) for r in t.ramps}
+    g = build_interchange(t, {}, feats).geometry
+    m = next(r for r in g.ramps if r.id == "m")
+    st = LayoutSettings()
+    c_width = next(r for r in g.ramps if r.id == "c").lanes * st.ramp_lane_width_m
+    assert m.end.parent == "c" and m.end.offset_m == pytest.approx(-c_width)
+    ok, detail = check_continuity(read_xodr(BytesIO(xodr_bytes(g))))
+    assert ok, detail
