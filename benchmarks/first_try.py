@@ -4,13 +4,14 @@ Builds each feature set of ``results/features/{class_id}.parquet`` of the given 
 exactly as ``benchmarks/geometry.py --from-results`` does (same seeds, same resampler),
 and for every ramp that misses its targets at the first try prints the fit it had then
 (just before it is resampled): its held radius (lane centre, over
-:data:`flyover.geometry._kernels.HOLD_M`) against its target, its slope, its conflicts and
+:data:`flyover.geometry._kernels.HOLD_M`) against its target (and its pointwise radius), its slope, its conflicts and
 what it met at its level, where along it the radius is tightest and whether it bends
 there with or against its turn, its turn, its Bézier pieces and leads, and its ends
 (parent and window length, m).
 
 Run (from the repository root, with a ``results/features`` folder from a workflow run):
-``PYTHONPATH=. .venv/bin/python benchmarks/first_try.py turbine directional_t --samples 0-20``.
+``PYTHONPATH=. .venv/bin/python benchmarks/first_try.py turbine directional_t --samples 0-20``;
+``--drawn 8``: the feature sets ``benchmarks/geometry.py --samples 8`` draws instead.
 The first try is captured by wrapping the build loop's ``_systematic`` test (called on
 the first-try fit right before the first resample), so this follows
 :mod:`flyover.geometry.build`; a ramp that was never resampled (systematically
@@ -98,6 +99,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("designs", nargs="+")
     ap.add_argument("--samples", default="", help="a range a-b of sample numbers (default: all)")
+    ap.add_argument("--drawn", type=int, default=0,
+                    help="this many feature sets drawn from the domains as benchmarks/geometry.py "
+                         "draws them, instead of results/features")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
     settings = LayoutSettings.from_config(cfg["geometry"])
@@ -107,7 +111,12 @@ def main() -> None:
     for design in args.designs:
         topo = topologies[design]
         cid = class_id_of(topo)
-        sets = read_feature_sets(f"results/features/{cid}.parquet")
+        if args.drawn:
+            from benchmarks.geometry import drawn_feature_sets  # noqa: PLC0415
+            profile = cfg["sampling"]["profiles"][cfg["sampling"]["profile"]]
+            sets = drawn_feature_sets(topo, profile, args.drawn, seed)
+        else:
+            sets = read_feature_sets(f"results/features/{cid}.parquet")
         picked = sorted(sets)
         if args.samples:
             lo, hi = (int(v) for v in args.samples.split("-"))
@@ -133,7 +142,8 @@ def main() -> None:
                 ends = ", ".join(f"{r.parent} ({r.hi - r.lo:.0f} m)" for r in (sp.start, sp.end)
                                  if r is not None)
                 print(f"{design} {sample} {o.ramp}: radius {fit.min_radius_m:.1f} / "
-                      f"{sp.target_radius_m:g}, slope {fit.max_slope_pct:.2f} / "
+                      f"{sp.target_radius_m:g} (pointwise "
+                      f"{getattr(fit, 'point_radius_m', math.nan):.1f}), slope {fit.max_slope_pct:.2f} / "
                       f"{sp.target_slope_pct:g}, conflicts {fit.conflicts}"
                       f"{' with ' + str(met) if met else ''}; "
                       f"tightest at {at:.0f} of {length:.0f} m "

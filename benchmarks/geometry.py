@@ -402,20 +402,35 @@ def remeasure(geometry, tapers: bool = True, net=None
     left by ``laneOffset``, which also shifts the reference line's lane layout), they do
     not move, and neither does their centre. ``net``: the .xodr already read back."""
     net = net or read_xodr(io.BytesIO(xodr_bytes(geometry)))
+    out: dict[str, tuple[float, float, float]] = {}
+    for name, (runs, slope) in lane_centre_runs(geometry, net, tapers=tapers).items():
+        held = [min([held_radius_xy(xy) for xy in rs] + [math.inf]) for rs in runs]
+        circles = min([min_radius(xy, step_m=0.5, chord_steps=int(HOLD_M)) for xy in runs[0]]
+                      + [math.inf])
+        out[name] = (held[0], slope, held[1], circles)
+    return out
+
+
+def lane_centre_runs(geometry, net, step_m: float = 0.5, tapers: bool = True
+                     ) -> dict[str, tuple[list[list[np.ndarray]], float]]:
+    """Ramp id → ((runs of the centre of its own lanes, runs of the line width / 2 right
+    of its reference line), its max slope %) read back from the .xodr ``net``: each run
+    contiguous points ``(N, 2)`` every ``step_m`` along the ramp's roads joined end to end
+    (see :func:`remeasure`; ``tapers=False``: not its junction connecting roads)."""
     widths = {r.id: r.lanes * geometry.ramp_lane_width_m for r in geometry.ramps}
     lanes = {r.id: r.lanes for r in geometry.ramps}
     by_ramp: dict[str, list] = {}
     for road in sorted(net.roads.values(), key=lambda r: int(r.id)):
         if road.name in widths and (road.junction == "-1" or tapers):
             by_ramp.setdefault(road.name, []).append(road)
-    out: dict[str, tuple[float, float, float]] = {}
+    out = {}
     for name, roads in by_ramp.items():
         lines: list[list[list[np.ndarray]]] = [[[]], [[]]]  # contiguous runs of points
         slope = 0.0
         for i, road in enumerate(roads):
             if road.length < 1e-3:
                 continue
-            s = np.linspace(0.0, road.length, max(3, int(road.length / 0.5) + 1))
+            s = np.linspace(0.0, road.length, max(3, int(road.length / step_m) + 1))
             x, y, z, h = road.reference(s)
             prev = roads[i - 1] if i else None
             nxt = roads[i + 1] if i + 1 < len(roads) else None
@@ -438,10 +453,7 @@ def remeasure(geometry, tapers: bool = True, net=None
             if len(s) > 1:
                 slope = max(slope, float(np.abs(np.diff(z) / np.diff(s)).max()) * 100.0)
         runs = [[np.concatenate(run) for run in line if run] for line in lines]
-        held = [min([held_radius_xy(xy) for xy in rs] + [math.inf]) for rs in runs]
-        circles = min([min_radius(xy, step_m=0.5, chord_steps=int(HOLD_M)) for xy in runs[0]]
-                      + [math.inf])
-        out[name] = (held[0], slope, held[1], circles)
+        out[name] = (runs, slope)
     return out
 
 

@@ -82,9 +82,15 @@ def test_a_road_over_itself_is_two_levels_a_clearance_apart_where_it_crosses(tmp
     # where they cross, the file has the loop at two heights 6.2 m apart, more than the
     # pipeline's 5.5 m clearance. (Feature set 0's lA1 crossed itself 5.9 m apart, 3.0 m
     # before road positions were written within 5 cm of arc length; since the search tests
-    # loops against themselves (GEOMETRY_VERSION 15) it does not cross itself.)
+    # loops against themselves (GEOMETRY_VERSION 15) it does not cross itself. Since a ramp
+    # is nowhere tighter than its target (GEOMETRY_VERSION 22), feature set 1's loop is
+    # fitted otherwise: built with seed 10, its outer border passes over its start again.)
     import numpy as np
-    _, path = _write(tmp_path, "cloverleaf_cd", 1)
+
+    from flyover.clients.designs import catalog_geometry
+    from flyover.opendrive.writer import xodr_bytes
+    path = tmp_path / "cloverleaf_cd_1.xodr"
+    path.write_bytes(xodr_bytes(catalog_geometry("cloverleaf_cd", 1, seed=10)))
     net = read_xodr(path)
     roads = [r for r in net.roads.values() if r.name == "lA1" and r.junction == "-1"]
     [loop] = roads

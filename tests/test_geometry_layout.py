@@ -423,12 +423,12 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
         return out
 
     monkeypatch.setattr(build, "_reroute", spy)
-    ic = build_interchange(t, lanes, feats, seed=3967713563)
+    ic = build_interchange(t, lanes, feats, seed=2735729615)
     assert calls == [("rR", calls[0][1], ["rL"])] and calls[0][1] > 0
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     # without it rR keeps its conflict with rL, and says so
     monkeypatch.setattr(build, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
-    ic = build_interchange(t, lanes, feats, seed=3967713563, settings=LayoutSettings(rebuilds=0))
+    ic = build_interchange(t, lanes, feats, seed=2735729615, settings=LayoutSettings(rebuilds=0))
     r_r = next(o for o in ic.outcomes if o.ramp == "rR")
     assert r_r.fit.conflicts > 0 and "with rL" in r_r.infeasible
 
@@ -471,12 +471,12 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
                "rA1": (210, 3), "rA2": (150, 5), "rB1": (math.inf, 4), "rB2": (280, 2)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
-                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 3583920652)
+                             (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), 323153949)
     assert domain.clearing("lB2", 1).slope_pct == 5.0
     assert DomainResampler((30.0,), (0.0,), frozenset({"c"}), 1).clearing("c", 1) is None
 
     def build(resampler):
-        ic = build_interchange(t, lanes, feats, class_id="c0", sample=11, seed=3583920652,
+        ic = build_interchange(t, lanes, feats, class_id="c0", sample=11, seed=323153949,
                                resampler=resampler, settings=LayoutSettings(rebuilds=0))
         return {o.ramp: o for o in ic.outcomes}
 
@@ -496,7 +496,7 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
 def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds():
     """A catalog turbine feature set (sample 57 of the workflow's t=2 array, lA2 at 280 m
     since inf is no radius of a turning ramp), with one restart and one resample: in the
-    first build rA2 still meets something at its level; a rebuild with other seeds clears
+    first build lA2 still meets something at its level; a rebuild with other seeds clears
     it, and the result says so (its seed, first-try failure and all the effort)."""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
@@ -506,7 +506,7 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
                "lA1": (30, 4), "lA2": (280, 2), "lB1": (100, 2), "lB2": (150, 2),
                "rA1": (30, 3), "rA2": (280, 4), "rB1": (60, 2), "rB2": (60, 2)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
-    seed = 2126496423
+    seed = 1191196492
     turning = frozenset(r for r in targets if not r.startswith("e"))
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
                              (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), seed, turning)
@@ -519,7 +519,7 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
 
     once = build(0)
     met = {o.ramp: o for o in once.outcomes if o.fit.conflicts}
-    assert list(met) == ["rA2"] and "same-level conflict" in met["rA2"].infeasible
+    assert list(met) == ["lA2"] and "same-level conflict" in met["lA2"].infeasible
     assert once.geometry.seed == seed
     again = build(3)
     assert all(o.fit.conflicts == 0 for o in again.outcomes)
@@ -544,7 +544,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     feats = {"r1": RampFeatures(210.0, 3.0), "r2": RampFeatures(280.0, 1.0),
              "r3": RampFeatures(40.0, 4.0), "r4": RampFeatures(100.0, 2.0)}
     st = LayoutSettings(rebuilds=0)
-    ic = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072467, settings=st)
+    ic = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=3653403231, settings=st)
     by = {o.ramp: o for o in ic.outcomes}
     assert all(o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     assert not same_level_conflicts(ic.geometry)
@@ -561,7 +561,7 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     # without the room rule, the same build squeezes r2 in beside R4
     monkeypatch.setattr(rails.AttachmentWindows, "room_beside",
                         lambda self, parent, off, width, lo, hi: (lo, hi))
-    squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=4032072467, settings=st)
+    squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=3653403231, settings=st)
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
 
 
@@ -588,14 +588,14 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
     t = catalog_topologies()["j1"]
     feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
     st = LayoutSettings(rebuilds=0)
-    ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=11, settings=st)
+    ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=4, settings=st)
     assert all(o.first_try_ok for o in ic.outcomes)
     jumps = _grade_jumps(ic.geometry)
     assert len(jumps) == 2 and max(jumps) <= 0.5
     # without the rule, the same build joins r3 on its grade
     monkeypatch.setattr(rails.AttachmentWindows, "level_part",
                         lambda self, parent, lo, hi, limit=None: (lo, hi))
-    anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=11, settings=st)
+    anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=4, settings=st)
     g = anywhere.geometry
     _, on_r3 = evaluate_polys(g.ramp("r3").elevation, np.array([g.ramp("r2").end.s_m]))
     assert abs(on_r3[0]) > 0.03
@@ -708,7 +708,7 @@ def test_a_ramp_attached_on_its_parents_grade_starts_and_ends_at_that_grade():
     feats = {"r1": RampFeatures(40.0, 1.0), "r2": RampFeatures(60.0, 2.0),
              "r3": RampFeatures(30.0, 2.0), "r4": RampFeatures(280.0, 1.0)}
     lanes = {"R1": 4, "R2": 4, "R3": 5, "R4": 4}
-    ic = build_interchange(t, lanes, feats, seed=3128706978, settings=LayoutSettings())
+    ic = build_interchange(t, lanes, feats, seed=3653403231, settings=LayoutSettings())
     g = ic.geometry
     r2, r3 = g.ramp("r2"), g.ramp("r3")
     _, grade_r3 = evaluate_polys(r3.elevation, np.array([r2.end.s_m]))

@@ -402,8 +402,9 @@ def _step_angle(c, d):  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover - compiled
     """What :func:`spline_terms` measures on one candidate's pieces ``ctrl`` ``(n, 4, 2)``
-    without the conflicts: length, minimum lane radius, turning, curvature variance,
-    mean squared curvature, joint jumps. Fills the samples (``m`` per piece at
+    without the conflicts: length, minimum lane radius (held over :data:`HOLD_M`),
+    turning, curvature variance, mean squared curvature, joint jumps, and the pointwise
+    minimum lane radius (at any sample: the ends and joints are samples). Fills the samples (``m`` per piece at
     parameters ``t``) the conflicts are counted on: reference line ``xs, ys``,
     tangent ``tx, ty``, speed ``sp``, station ``ss`` (see :func:`_lane`); ``kap``
     is scratch."""
@@ -439,8 +440,11 @@ def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover 
     turn = 0.0
     mean = 0.0
     k2 = 0.0
+    rpt = np.inf  # the tightest lane-centre radius at any sample (pointwise)
     for j in range(n):
         kj = kap[j]
+        if kj != 0.0:
+            rpt = min(rpt, abs(1.0 / kj + 0.5 * width))
         mean += kj
         k2 += kj * kj
         if j > 0:  # the heading change from the previous sample
@@ -463,7 +467,7 @@ def _shape(ctrl, m, width, t, xs, ys, tx, ty, sp, ss, kap):  # pragma: no cover 
         r = np.inf if kj == 0.0 else abs(1.0 / kj + 0.5 * width)
         if r < rmin:
             rmin = r
-    return off, rmin, turn, max(k2 - mean * mean, 0.0), k2, g2
+    return off, rmin, turn, max(k2 - mean * mean, 0.0), k2, g2, rpt
 
 
 @njit(cache=True, inline="always")
@@ -653,9 +657,17 @@ def decode(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z,
     return ctrl, stations, poses, turn
 
 
+#: the search holds a ramp's lane centre nowhere tighter (pointwise, at its samples) than
+#: its radius target (``inf``: the floor) less this share: 4.5 %, within the 5 % tolerance,
+#: so that the final dense measurement (points between the search's samples) stays
+#: within it too
+POINT_MARGIN = 0.045
+#: weight of the pointwise term (``spike``: the share the tightest point falls short)
+SPIKE_WEIGHT = 10.0
+
 #: rows of :func:`objective_terms` (the penalty terms of the ramp objective)
 TERMS = ("rad_err", "smooth", "shortfall", "excess", "spread", "turn_err", "g2", "conflicts",
-         "depth")
+         "depth", "spike")
 
 
 @njit(cache=True, inline="always")
@@ -674,7 +686,7 @@ def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no
             + 10.0 * max(t[5, p] - 0.05, 0.0)
             + conflict_weight * (t[7, p] + depth_weight * t[8, p])
             + 0.01 * min(t[6, p], 10.0) + 2.0 * t[3, p] ** 2
-            + compact_weight * t[4, p])
+            + compact_weight * t[4, p] + SPIKE_WEIGHT * (t[9, p] + 10.0 * t[9, p] ** 2))
 
 
 @njit(cache=True, nogil=True)
@@ -682,7 +694,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
                     z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
                     x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound, gap):  # pragma: no cover - compiled
-    """The ramp objective's terms (rows :data:`TERMS`, ``(9, P)``) of decision vectors ``x``.
+    """The ramp objective's terms (rows :data:`TERMS`, ``(10, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
     (relative; for an ``inf`` target, how far it falls short of ``inf_floor``,
@@ -692,7 +704,9 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     level ramp (``grade`` 0) 1 when its ends differ in height), excess length
     over a reference, the pull of stubs toward the centre (``spread_a/b``: the
     start / end station counts), the turn error, the curvature jumps at joints
-    (scaled like smoothness), conflicting samples and their depth. The crest is
+    (scaled like smoothness), conflicting samples and their depth, and the spike: how
+    far (relative) the tightest lane-centre radius at any sample falls short of the
+    target (``inf``: ``inf_floor``) less :data:`POINT_MARGIN` (0: nowhere tighter). The crest is
     the higher end or ``z_crest`` (``-inf``: none).
 
     ``bound`` ``(P,)``: a candidate whose energy (:func:`energy` with ``weights``)
@@ -711,12 +725,14 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     zc = np.maximum(np.maximum(za, zb), z_crest)
     g = grade if grade > 0 else 1.0
     t, xs, ys, tx, ty, sp, kap, ss, cx, cy, zz, ln = _scratch(m, ctrl.shape[1] * m)
-    out = np.empty((9, p_count))
+    out = np.empty((10, p_count))
     inf_target = np.isinf(r_target)
+    # nowhere tighter than this (pointwise): the target (inf: the floor) less the margin
+    r_point = (inf_floor if inf_target else r_target) * (1.0 - POINT_MARGIN)
     r_eff = min(r_target, inf_ref)
     for p in range(p_count):
-        length, rmin, turned, kvar, k2, g2 = _shape(ctrl[p], m, width, t, xs, ys, tx, ty, sp,
-                                                    ss[0], kap)
+        length, rmin, turned, kvar, k2, g2, rpt = _shape(ctrl[p], m, width, t, xs, ys, tx, ty,
+                                                         sp, ss[0], kap)
         if grade > 0:
             need = _climb_distance(zc[p] - za[p], grade, transition) + \
                 _climb_distance(zc[p] - zb[p], grade, transition)
@@ -740,6 +756,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
         out[3, p] = max(length / l_ref - 1.0, 0.0)
         out[4, p] = spread_a * (st[0, p] / compact_m) ** 2 + spread_b * (st[1, p] / compact_m) ** 2
         out[5, p] = abs(turned - turn[p])
+        out[9, p] = max(r_point - rpt, 0.0) / r_point
         out[7, p] = 0.0
         out[8, p] = 0.0
         if _energy1(out, p, weights[0], weights[1], weights[2]) > bound[p]:
@@ -766,12 +783,13 @@ def energy(terms, conflict_weight, depth_weight, compact_weight):  # pragma: no 
 @njit(cache=True, nogil=True)
 def acceptable(terms, accept_radius):  # pragma: no cover - compiled
     """Candidates meeting the targets on these samples: radius, length, turn, no conflict,
-    excess under 30 %."""
+    excess under 30 %, nowhere tighter than the target less :data:`POINT_MARGIN`."""
     p_count = terms.shape[1]
     out = np.zeros(p_count, np.bool_)
     for p in range(p_count):
         out[p] = (abs(terms[0, p]) < accept_radius and terms[2, p] == 0.0
-                  and terms[5, p] < 0.05 and terms[7, p] == 0.0 and terms[3, p] < 0.3)
+                  and terms[5, p] < 0.05 and terms[7, p] == 0.0 and terms[3, p] < 0.3
+                  and terms[9, p] == 0.0)
     return out
 
 

@@ -354,8 +354,12 @@ def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
         else:
             parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
     if not fit.radius_ok and math.isinf(sp.target_radius_m):
-        parts.append(f"radius: {fit.min_radius_m:.1f} m, tighter than the {sp.inf_floor_m:g} m "
-                     f"an inf target allows")
+        parts.append(f"radius: {min(fit.min_radius_m, fit.point_radius_m):.1f} m, tighter "
+                     f"than the {sp.inf_floor_m:g} m an inf target allows")
+    elif not fit.radius_ok and abs(fit.min_radius_m - sp.target_radius_m) \
+            <= 0.05 * sp.target_radius_m:
+        parts.append(f"radius: {fit.point_radius_m:.1f} m at a point, tighter than 95 % of "
+                     f"{sp.target_radius_m:g} m")
     elif not fit.radius_ok:
         parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
     if fit.conflicts:

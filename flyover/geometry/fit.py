@@ -31,7 +31,12 @@ benchmark's reference).
 Radius targets apply to the ramp's **lane centre line** (``width_m / 2`` right
 of the reference line), to the tightest radius it *holds* over
 :data:`flyover.geometry._kernels.HOLD_M` (10 m) of arc: a curve tight only for a
-few metres does not count as turning at that radius. A target of ``inf`` on a ramp that has to turn means
+few metres does not count as turning at that radius. It must not be tighter than that
+either: the lane centre is nowhere (pointwise) tighter than 95 % of the target (the
+search: 95.5 %, :data:`flyover.geometry._kernels.POINT_MARGIN`), since a vehicle follows the
+curvature at every point (a short end leg of a cubic can turn at a tenth of the target
+for a metre or two, and the exported road shows it as a heading step at a link).
+A target of ``inf`` on a ramp that has to turn means
 *no radius to match*: the ramp is fitted as the gentlest curve its ends allow
 (curvature² is minimised instead of matching a radius), and its radius counts
 as within tolerance when it is no tighter than :attr:`RampSpec.inf_floor_m`
@@ -50,7 +55,8 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from flyover.geometry import _kernels
-from flyover.geometry.bezier import heading_vec, held_radius, lane_centre, sample_spline
+from flyover.geometry.bezier import (heading_vec, held_radius, lane_centre, lane_radius,
+                                     sample_spline)
 from flyover.geometry.profile import elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
@@ -226,13 +232,18 @@ class RampFit:
     evaluations: int
     seconds: float
     z_crest: float
+    #: the tightest lane-centre radius at any point (m), not held over any length
+    point_radius_m: float = math.inf
 
     @property
     def radius_ok(self) -> bool:
+        """The held radius within 5 % of the target (``inf``: no tighter than 0.95 × the
+        floor), and the lane centre nowhere (pointwise) tighter than 0.95 × the target
+        (``inf``: the floor)."""
         t = self.spec.target_radius_m
         if math.isinf(t):
-            return self.min_radius_m >= 0.95 * self.spec.inf_floor_m
-        return abs(self.min_radius_m - t) <= 0.05 * t
+            return min(self.min_radius_m, self.point_radius_m) >= 0.95 * self.spec.inf_floor_m
+        return abs(self.min_radius_m - t) <= 0.05 * t and self.point_radius_m >= 0.95 * t
 
     @property
     def slope_ok(self) -> bool:
@@ -599,6 +610,7 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
     dense = sample_spline(ctrl, 400)
     length = float(dense.length)
     rmin = held_radius(dense, spec.width_m, _kernels.HOLD_M)
+    rpt = float(lane_radius(dense.curvature, spec.width_m).min())
     za, zb = pose_a[3], pose_b[3]
     zc = float(_crest(spec, np.array([za]), np.array([zb]))[0])
     g = spec.target_slope_pct / 100.0
@@ -609,7 +621,7 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
                             ga, gb)
     slope = max_grade(polys, length) * 100.0
     fit = RampFit(spec, ctrl, start_s, end_s, pose_a, pose_b, polys, length, rmin, slope, 0,
-                  evaluations, seconds, zc)
+                  evaluations, seconds, zc, rpt)
     return recount(fit, obstacles, settings)
 
 

@@ -140,7 +140,12 @@ def class_tables(stage):
 # 20: a collector road of split stubs whose loop goes to the road it crosses (Columbus
 #     09) passes under it, ends past it beside its own road, level after its first stub
 #     (a level ramp, never lifted); catalog unchanged
-GEOMETRY_VERSION = 21; 21: a ramp merging along a stub's body (not at its free start) adds a lane beside it, as the writer's lane links do (Columbus r5 into r13 was laid over r13's outer lane: lanes 4 m off in the file)
+# 21: a ramp merging along a stub's body (not at its free start) adds a lane beside it, as
+#     the writer's lane links do (Columbus r5 into r13 was laid over r13's outer lane)
+# 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
+#     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
+#     joints turned at down to a tenth of it)
+GEOMETRY_VERSION = 22
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
