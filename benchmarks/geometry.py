@@ -318,8 +318,9 @@ def _own_lanes(road, first: set[int] | None, last: set[int] | None, n: int) -> l
     """The ramp's own driving lanes in each lane section of ``road`` (not the auxiliary
     lanes of a merging or diverging ramp beside them): ``first`` (``last``), the lane ids
     of its first (last) section that the ramp's adjacent connecting road links to, are
-    followed section by section through the lane links; without either (a piece between
-    two straight-on links), its ``n`` innermost driving lanes."""
+    followed section by section through the lane links, at most ``n`` of them (the
+    innermost); without either (a piece between two straight-on links), its ``n``
+    innermost driving lanes."""
     secs = road.sections
     driving = [{k for k, ln in sec.lanes.items() if ln.type == "driving"} for sec in secs]
     out: list[set[int]] = [set() for _ in secs]
@@ -334,6 +335,9 @@ def _own_lanes(road, first: set[int] | None, last: set[int] | None, n: int) -> l
                 & driving[i]
     else:
         out = [set(sorted(d, reverse=True)[:n]) for d in driving]
+    # a carriageway's lanes beyond the ramp's close on its body, outermost first (the T
+    # designs): the ramp's own are the n innermost of those followed
+    out = [set(sorted(o, reverse=True)[:n]) for o in out]
     return [o if o else d for o, d in zip(out, driving)]
 
 
