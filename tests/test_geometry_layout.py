@@ -331,7 +331,7 @@ def test_cloverleaf_outer_connectors_go_round_their_loops_not_over_them(monkeypa
     at heights that let them cross (both climb between the two levels); a real one goes
     round the loop. Fitted with the loop as an obstacle at every height, none crosses its
     loop in plan; with that rule off, the same feature set has connectors over loops."""
-    from flyover.geometry import rails  # noqa: PLC0415
+    from flyover.geometry import loop_room  # noqa: PLC0415
 
     t = catalog_topologies()["cloverleaf"]
     slopes = {"lA1": 2, "lA2": 3, "lB1": 1, "lB2": 5, "oA1": 4, "oA2": 1, "oB1": 4, "oB2": 3}
@@ -348,7 +348,7 @@ def test_cloverleaf_outer_connectors_go_round_their_loops_not_over_them(monkeypa
     assert crossings(ic) == set()
     assert not {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)
                 if c.ramp.startswith("l") and c.other.startswith("o")}
-    monkeypatch.setattr(rails.AttachmentWindows, "round_loops", lambda self, ramp: frozenset())
+    monkeypatch.setattr(loop_room.LoopRoom, "round_loops", lambda self, ramp: frozenset())
     over = build_interchange(t, lanes, feats, seed=430509475)
     assert crossings(over)
     # the check module finds the same bridges (independently: segment pairs via a k-d tree)
@@ -724,7 +724,7 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     now ends where a connector at its radius can go round a loop at its radius, and the
     loop keeps off where the connector turns; with both rules off, the same feature set has
     a connector over (or under) its loop."""
-    from flyover.geometry import levels, rails  # noqa: PLC0415
+    from flyover.geometry import levels, loop_room  # noqa: PLC0415
 
     t = catalog_topologies()["cloverstack"]
     feats = {"eA1": (60, 5), "eA2": (40, 2), "fA1": (60, 2), "fA2": (100, 4), "lB1": (150, 1),
@@ -739,8 +739,8 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     ic = build_interchange(t, lanes, feats, seed=2113364338)
     assert all(o.fit.ok for o in ic.outcomes)
     assert not over(ic)
-    monkeypatch.setattr(rails.AttachmentWindows, "fences", lambda self, loop: [])
-    monkeypatch.setattr(rails.AttachmentWindows, "room_round", lambda self, loop, stub: 0.0)
+    monkeypatch.setattr(loop_room.LoopRoom, "fences", lambda self, loop: [])
+    monkeypatch.setattr(loop_room.LoopRoom, "room_round", lambda self, loop, stub: 0.0)
     monkeypatch.setattr(levels.LevelPlan, "round_room", lambda self, ramp: 0.0)
     assert over(build_interchange(t, lanes, feats, seed=2113364338))
 

@@ -212,7 +212,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         fit, evals, secs = None, 0, 0.0
         if built is not None and built.ok:
             fit = built
-        elif loops := b.windows.round_loops(ramp):
+        elif loops := b.windows.loops.round_loops(ramp):
             # a cloverleaf's outer connector goes round its loop, not over or under it:
             # fitted with the loop as an obstacle at every height and one more Bézier piece
             # to bow out with (without, then with its leads); if it cannot meet its targets
@@ -229,7 +229,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                 evals, secs = evals + e2, secs + s2
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
-        if fit is None and (fences := tuple(b.windows.fences(ramp))):
+        if fit is None and (fences := tuple(b.windows.loops.fences(ramp))):
             # a loop whose outer connector leaves a fitted stub keeps off where that one
             # must turn round it (:meth:`AttachmentWindows.fences`); if it cannot meet its
             # targets so, it is fitted as any other ramp

@@ -21,7 +21,7 @@ attachments) and the ramp's targets.
 * A loop whose outer connector leaves (joins) a stub fitted before it keeps, on the
   road they share, the connector's turn at its radius away from the stub's free end:
   its window there begins beyond it, and a fence at every height keeps its body off
-  (:meth:`AttachmentWindows.fences`; the build loop drops the fence if the loop cannot
+  (:meth:`flyover.geometry.loop_room.LoopRoom.fences`; the build loop drops the fence if the loop cannot
   meet its targets within it).
 * A ramp leaving (joining) a loop does so before (after) the loop turns. A ramp
   attached on the side of a parent that faces a road (J1's r2 joins r3 on the
@@ -38,7 +38,6 @@ attachments) and the ramp's targets.
 
 from __future__ import annotations
 
-import math
 from typing import Mapping
 
 import numpy as np
@@ -46,6 +45,7 @@ import numpy as np
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Rail
 from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.loop_room import LoopRoom
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
@@ -68,6 +68,7 @@ class AttachmentWindows:
         self.moves, self.fitted, self.st = moves, fitted, st
         self.roads, self.g, self.topo = moves.roads, moves.g, moves.topo
         self.features = dict(features or {})
+        self.loops = LoopRoom(moves, fitted, st, self.features)
 
     def rail(self, ramp: str, feat: RampFeatures, end, is_start: bool, loop: bool,
              width: float, extra: float = 0.0, bound: float | None = None,
@@ -121,7 +122,7 @@ class AttachmentWindows:
             if pos is not None:
                 for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
                     round_loop = moves.goes_round_loop(ramp, other, road)
-                    room = self.room_round(ramp, other)
+                    room = self.loops.room_round(ramp, other)
                     if p < pos:
                         lo = max(lo, t_max + st.gap_m, t_max + room)
                         if moves.crosses_loop_exit(ramp, other, road):
@@ -130,11 +131,11 @@ class AttachmentWindows:
                             lo = max(lo, t_other + st.fit.clearance_m / g
                                      + st.fit.transition_m + st.gap_m)
                         if round_loop:
-                            lo = max(lo, self.round_loop(other, road, width, +1, feat))
+                            lo = max(lo, self.loops.round_loop(other, road, width, +1, feat))
                     elif p > pos:
                         hi = min(hi, t_min - st.gap_m, t_min - room)
                         if round_loop:
-                            hi = min(hi, self.round_loop(other, road, width, -1, feat))
+                            hi = min(hi, self.loops.round_loop(other, road, width, -1, feat))
             if lo > hi - 1.0:  # no room left between the others: keep the side's order
                 lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
             # never beyond the carriageway's ends (a half line's, a T's terminal)
@@ -143,80 +144,6 @@ class AttachmentWindows:
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
-
-    def room_round(self, loop: str, stub: str) -> float:
-        """Room (m) a ``loop`` keeps along its road from the free end of a fitted ``stub``
-        on it, when a child of the stub is the loop's outer connector (a cloverstack's
-        ``oA1`` leaves ``eA1`` and goes round ``lB1``): the connector starts where the stub
-        ends, so there it must have room to turn at its radius round the loop: its radius
-        target (``inf``: ``inf_reference_m``) and the room between their centre lines (as
-        :meth:`round_loop`). 0 otherwise."""
-        moves = self.moves
-        if not moves.is_loop(loop) or not moves.is_stub(stub):
-            return 0.0
-        for kid in moves.kids(stub):
-            roads = {e[0] for e in ends(self.topo, kid) if e is not None and e[0] in self.roads}
-            if kid in self.features and any(moves.goes_round_loop(kid, loop, r) for r in roads):
-                r_kid = self.features[kid].radius_m
-                r_kid = r_kid if math.isfinite(r_kid) else self.st.fit.inf_reference_m
-                return r_kid + self.fitted.width[kid] + self.fitted.width[loop] / 2 + 1.0
-        return 0.0
-
-    def fences(self, loop: str) -> list[tuple[float, ...]]:
-        """Where a ``loop`` must not go so that an outer connector leaving a fitted stub
-        can go round it (:meth:`room_round`): on the side of each road it shares with such
-        a stub, everything within that room of the stub's free end and beyond it, away
-        from the crossing (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their
-        height: the layout keeps them out at every height, as a keep-out loop). The loop's
-        window there begins beyond it (:meth:`road_rail`); its body may not reach back."""
-        out = []
-        for end, is_start in zip(ends(self.topo, loop), (True, False)):
-            if end is None or end[0] not in self.roads:
-                continue
-            road, label = end
-            r = self.roads[road]
-            pos = self.g.edges[(road, loop) if is_start else (loop, road)].get("pos")
-            if pos is None:
-                continue
-            edge = r.lanes * self.st.lane_width_m
-            lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
-            for p, t_min, t_max, other, _ in self.fitted.attached.get(road, []):
-                room = self.room_round(loop, other)
-                if room <= 0 or p == pos:
-                    continue
-                t = (t_max - 1e4, t_max + room) if p < pos else (t_min - room, t_min + 1e4)
-                out.append((r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading),
-                            *t, *lat))
-        return out
-
-    def round_loops(self, ramp: str) -> frozenset[str]:
-        """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
-        joining the same two roads the other way round, on the road they share)."""
-        out = set()
-        for end in ends(self.topo, ramp):
-            if end is None or end[0] not in self.roads:
-                continue
-            for other in self.fitted.fits:
-                if any(e is not None and e[0] == end[0] for e in ends(self.topo, other)) \
-                        and self.moves.goes_round_loop(ramp, other, end[0]):
-                    out.add(other)
-        return frozenset(out)
-
-    def round_loop(self, loop: str, road: str, width: float, side: int,
-                   feat: RampFeatures) -> float:
-        """Where along ``road`` a ramp turning at its target radius must attach to go round
-        the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
-        distance an arc of that radius needs to get as far from the road."""
-        r, st = self.roads[road], self.st
-        d = np.array([math.cos(r.heading), math.sin(r.heading)])
-        rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
-        t = rel @ d
-        lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
-        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
-        c = width + self.fitted.width[loop] / 2 + 1.0
-        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
-                        rad + c)
-        return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
 
     def ramp_rail(self, parent: str, ramp: str, label: Label, is_start: bool,
                   width: float, level: bool = True, gentle: float | None = None) -> Rail:

@@ -1,0 +1,108 @@
+"""Room round a loop: where a cloverleaf's outer connector and the loop it goes round
+keep out of each other's way.
+
+Decides how far along a road a loop keeps from a fitted stub whose child goes round
+it (:meth:`LoopRoom.room_round`), the fences that keep the loop's body off that
+child's turn (:meth:`LoopRoom.fences`), which fitted loops a ramp goes round
+(:meth:`LoopRoom.round_loops`) and where along their shared road a ramp must attach to
+go round one (:meth:`LoopRoom.round_loop`). Reads the road layout, the ramps' kinds
+(:class:`flyover.geometry.chains.Movements`), the ramps fitted so far and their
+targets. The attachment windows (:mod:`flyover.geometry.rails`) and the build loop
+(:mod:`flyover.geometry.build`) use it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+
+from flyover.geometry.chains import Movements, ends
+from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.settings import LayoutSettings, RampFeatures
+
+__all__ = ["LoopRoom"]
+
+
+class LoopRoom:
+    """Room between loops and the ramps that go round them, given what is fitted so far."""
+
+    def __init__(self, moves: Movements, fitted: FittedRamps, st: LayoutSettings,
+                 features: Mapping[str, RampFeatures]):
+        self.moves, self.fitted, self.st, self.features = moves, fitted, st, features
+        self.roads, self.g, self.topo = moves.roads, moves.g, moves.topo
+
+    def room_round(self, loop: str, stub: str) -> float:
+        """Room (m) a ``loop`` keeps along its road from the free end of a fitted ``stub``
+        on it, when a child of the stub is the loop's outer connector (a cloverstack's
+        ``oA1`` leaves ``eA1`` and goes round ``lB1``): the connector starts where the stub
+        ends, so there it must have room to turn at its radius round the loop: its radius
+        target (``inf``: ``inf_reference_m``) and the room between their centre lines (as
+        :meth:`round_loop`). 0 otherwise."""
+        moves = self.moves
+        if not moves.is_loop(loop) or not moves.is_stub(stub):
+            return 0.0
+        for kid in moves.kids(stub):
+            roads = {e[0] for e in ends(self.topo, kid) if e is not None and e[0] in self.roads}
+            if kid in self.features and any(moves.goes_round_loop(kid, loop, r) for r in roads):
+                r_kid = self.features[kid].radius_m
+                r_kid = r_kid if math.isfinite(r_kid) else self.st.fit.inf_reference_m
+                return r_kid + self.fitted.width[kid] + self.fitted.width[loop] / 2 + 1.0
+        return 0.0
+
+    def fences(self, loop: str) -> list[tuple[float, ...]]:
+        """Where a ``loop`` must not go so that an outer connector leaving a fitted stub
+        can go round it (:meth:`room_round`): on the side of each road it shares with such
+        a stub, everything within that room of the stub's free end and beyond it, away
+        from the crossing (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their
+        height: the layout keeps them out at every height, as a keep-out loop). The loop's
+        window there begins beyond it (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach back."""
+        out = []
+        for end, is_start in zip(ends(self.topo, loop), (True, False)):
+            if end is None or end[0] not in self.roads:
+                continue
+            road, label = end
+            r = self.roads[road]
+            pos = self.g.edges[(road, loop) if is_start else (loop, road)].get("pos")
+            if pos is None:
+                continue
+            edge = r.lanes * self.st.lane_width_m
+            lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+            for p, t_min, t_max, other, _ in self.fitted.attached.get(road, []):
+                room = self.room_round(loop, other)
+                if room <= 0 or p == pos:
+                    continue
+                t = (t_max - 1e4, t_max + room) if p < pos else (t_min - room, t_min + 1e4)
+                out.append((r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading),
+                            *t, *lat))
+        return out
+
+    def round_loops(self, ramp: str) -> frozenset[str]:
+        """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
+        joining the same two roads the other way round, on the road they share)."""
+        out = set()
+        for end in ends(self.topo, ramp):
+            if end is None or end[0] not in self.roads:
+                continue
+            for other in self.fitted.fits:
+                if any(e is not None and e[0] == end[0] for e in ends(self.topo, other)) \
+                        and self.moves.goes_round_loop(ramp, other, end[0]):
+                    out.add(other)
+        return frozenset(out)
+
+    def round_loop(self, loop: str, road: str, width: float, side: int,
+                   feat: RampFeatures) -> float:
+        """Where along ``road`` a ramp turning at its target radius must attach to go round
+        the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
+        distance an arc of that radius needs to get as far from the road."""
+        r, st = self.roads[road], self.st
+        d = np.array([math.cos(r.heading), math.sin(r.heading)])
+        rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
+        t = rel @ d
+        lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
+        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
+        c = width + self.fitted.width[loop] / 2 + 1.0
+        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
+                        rad + c)
+        return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
