@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from flyover.config import load_config
+from flyover.geometry.bezier import lane_radius
 from flyover.geometry.model import InterchangeGeometry
 from flyover.topology.canonical import class_id as class_id_of
 from flyover.topology.catalog import catalog_topologies
@@ -74,8 +75,7 @@ def pointwise(ramp, width_m: float, m: int, near_m: float, hold_m: float = 10.0)
         joints.append(off)
         straight.append(bool(np.all(np.abs(kap) < 1e-12)))
     kap, s = np.concatenate(kaps), np.concatenate(ss)
-    with np.errstate(divide="ignore"):
-        r = np.where(kap == 0.0, np.inf, np.abs(1.0 / kap + 0.5 * width_m))
+    r = lane_radius(kap, width_m)
     i = int(np.argmin(r))
     curved = [k for k, st in enumerate(straight) if not st] or [0]
     first, last = joints[curved[0]], joints[curved[-1] + 1]
@@ -96,7 +96,7 @@ def pointwise(ramp, width_m: float, m: int, near_m: float, hold_m: float = 10.0)
     j = np.flatnonzero(ok)
     with np.errstate(divide="ignore", invalid="ignore"):
         kh = (turn[k[ok]] - turn[j]) / np.maximum(s[k[ok]] - s[j], 1e-9)
-        rh = np.where(kh == 0.0, np.inf, np.abs(1.0 / kh + 0.5 * width_m))
+    rh = lane_radius(kh, width_m)
     return {"r_point": float(r[i]), "where": where, "s": at, "length": float(s[-1]),
             "r_held": float(rh.min()) if len(rh) else math.inf}
 
