@@ -145,7 +145,10 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-GEOMETRY_VERSION = 22
+# 23: an outer connector reaching its loop's roads through stubs (Columbus r11 round r6) is
+#     fitted after the loop and round it; a collector road's level second stub (r13) before
+#     the connector forking beside it (r2); catalog unchanged
+GEOMETRY_VERSION = 23
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
