@@ -19,21 +19,23 @@ def test_each_branch_of_a_terminal_is_fenced_off_its_siblings_side(name):
     b = _state(name)
     edge = 3 * b.st.lane_width_m
     reach = b.st.fit.clearance_m / 0.08 + b.st.fit.transition_m  # both at 4 %
-    (left,) = terminal_fences(b.moves, b.features, b.st, "rL")  # B1 straight on
+    left, median = terminal_fences(b.moves, b.features, b.st, "rL")  # B1 straight on
     (right,) = terminal_fences(b.moves, b.features, b.st, "rR")  # B1 right @1
     t_hi = b.roads["B1"].t_hi
-    for fence in (left, right):  # beyond B1's end, as far as they need to part in height
+    for fence in (left, median, right):  # beyond B1's end, as far as they part in height
         assert fence[4:6] == pytest.approx((t_hi, t_hi + reach))
     assert left[6:] == pytest.approx((-1e4, -edge - 0.5))  # the straight one: not right
+    assert median[6:] == pytest.approx((0.5, 1e4))  # nor across the median
     assert right[6:] == pytest.approx((-edge + 0.5, 1e4))  # the right turn: not left
     if name == "trumpet":  # rA1 joins the loop, not a terminal
         assert terminal_fences(b.moves, b.features, b.st, "rA1") == []
     else:  # B2 begins from rA2 (straight on) and rA1 (on its right at 0)
-        (merge,) = terminal_fences(b.moves, b.features, b.st, "rA2")
+        merge, median = terminal_fences(b.moves, b.features, b.st, "rA2")
         (joins,) = terminal_fences(b.moves, b.features, b.st, "rA1")
         t_lo = b.roads["B2"].t_lo
         assert merge[4:6] == joins[4:6] == pytest.approx((t_lo - reach, t_lo))
         assert merge[6:] == pytest.approx((-1e4, -edge - 0.5))
+        assert median[6:] == pytest.approx((0.5, 1e4))
         assert joins[6:] == pytest.approx((-edge + 0.5, 1e4))
 
 

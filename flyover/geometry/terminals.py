@@ -7,8 +7,10 @@ turn); the carriageway of the other direction begins where they merge (In-M and 
 a clearance apart in height, neither may swing across to the other's side of the
 carriageway's right edge (a left turn wiggling out to the right to gain height leaves its
 sibling right turn, fitted after it, no room to leave; a right turn first bulging left
-runs into the left turn's lanes). :func:`terminal_fences` gives each branch a fence on
-the other's side for that distance (:attr:`flyover.geometry.fit.Obstacles.lines` rows
+runs into the left turn's lanes), and the straight one not across the median either (the
+other carriageway's terminal lies beyond it: directional_t's rA2, coming into B2 along its
+axis, swung across into rL's and rR's way). :func:`terminal_fences` gives each branch
+fences on those sides for that distance (:attr:`flyover.geometry.fit.Obstacles.lines` rows
 without their height; the layout keeps them out at every height, and the build loop
 drops them when the ramp cannot meet its targets within them, as the loop fences of
 :mod:`flyover.geometry.loop_room`).
@@ -67,8 +69,10 @@ def terminal_fences(moves: Movements, features: Mapping[str, RampFeatures],
         reach = st.fit.clearance_m / max(g, 0.005) + st.fit.transition_m
         edge = road.lanes * st.lane_width_m
         straight = branches[ramp] in (Label.OUT_M, Label.IN_M)
-        lat = (-1e4, -edge - 0.5) if straight else (-edge + 0.5, 1e4)
+        # the straight one keeps within the carriageway's edges (off the median: the
+        # other carriageway's terminal lies across it), the right one right of them
+        lats = [(-1e4, -edge - 0.5), (0.5, 1e4)] if straight else [(-edge + 0.5, 1e4)]
         along = (t_end, t_end + reach) if leaving else (t_end - reach, t_end)
-        out.append((road.origin[0], road.origin[1], math.cos(road.heading),
-                    math.sin(road.heading), *along, *lat))
+        out += [(road.origin[0], road.origin[1], math.cos(road.heading),
+                 math.sin(road.heading), *along, *lat) for lat in lats]
     return out
