@@ -148,7 +148,9 @@ def class_tables(stage):
 # 23: the two branches of a T's terminal (straight on and right at the end; the merge
 #     of the other carriageway likewise) are fenced off each other's side of the
 #     carriageway's right edge until they are a clearance apart in height
-#     (flyover.geometry.terminals): directional_t's rR no longer meets rL there
+#     (flyover.geometry.terminals): directional_t's rR no longer meets rL there; and a
+#     ramp whose child attaches on the side facing its road keeps a lane off that road's
+#     edge outside its window (flyover.geometry.beside): J1's r2 finds room beside r1/r3
 GEOMETRY_VERSION = 23
 
 
