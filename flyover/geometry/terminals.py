@@ -48,9 +48,10 @@ def terminal_fences(moves: Movements, features: Mapping[str, RampFeatures],
                     st: LayoutSettings, ramp: str) -> list[tuple[float, ...]]:
     """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping
     ``ramp``, one branch of a T's terminal, off its sibling's side of the carriageway's
-    right edge for as far beyond (before) the terminal as the two need to be a clearance
-    apart in height at their slope targets (:attr:`FitSettings.clearance_m` over the sum
-    of their grades, and a grade transition). Empty for any other ramp."""
+    right edge (the straight branch also off the median side of its left edge) for as far
+    beyond (before) the terminal as the two need to be a clearance apart in height at
+    their slope targets (:attr:`FitSettings.clearance_m` over the sum of their grades, and
+    a grade transition). Empty for any other ramp."""
     out = []
     for end, leaving in zip(ends(moves.topo, ramp), (True, False)):
         if end is None or end[0] not in moves.roads:
