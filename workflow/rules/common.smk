@@ -145,7 +145,13 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-GEOMETRY_VERSION = 22
+# 23: the two branches of a T's terminal (straight on and right at the end; the merge
+#     of the other carriageway likewise) are fenced off each other's side of the
+#     carriageway's right edge until they are a clearance apart in height
+#     (flyover.geometry.terminals): directional_t's rR no longer meets rL there; and a
+#     ramp whose child attaches on the side facing its road keeps a lane off that road's
+#     edge outside its window (flyover.geometry.beside): J1's r2 finds room beside r1/r3
+GEOMETRY_VERSION = 23
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
