@@ -151,7 +151,10 @@ def class_tables(stage):
 #     (flyover.geometry.terminals): directional_t's rR no longer meets rL there; and a
 #     ramp whose child attaches on the side facing its road keeps a lane off that road's
 #     edge outside its window (flyover.geometry.beside): J1's r2 finds room beside r1/r3
-GEOMETRY_VERSION = 23
+# 24: an outer connector reaching its loop's roads through stubs (Columbus r11 round r6) is
+#     fitted after the loop and round it; a collector road's level second stub (r13) before
+#     the connector forking beside it (r2); catalog unchanged
+GEOMETRY_VERSION = 24
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
