@@ -145,7 +145,11 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-GEOMETRY_VERSION = 22
+# 23: expressways ending here that continue one another (DC 26's I-66 and Potomac Freeway)
+#     are one line: the one without ramps to a third road runs on past the centre, in the
+#     other's median, to 40 m short of its terminal; the ramps between them are short and
+#     level (catalog unchanged: no design has such a pair)
+GEOMETRY_VERSION = 23
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
