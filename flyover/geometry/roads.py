@@ -16,6 +16,13 @@ settings.
   there). Each through expressway is on its own level (0, 1, ...); the
   terminating ones, which never meet, share the level above them (a T's
   terminating expressway above the through one).
+* Two expressways ending here that continue one another
+  (:func:`flyover.geometry.chains.continuations`: DC's I-66 and Potomac Freeway) are
+  one line, placed as a through expressway is: the one with ramps to a third road at
+  its terminal (the *kept* one) keeps it; its partner runs on past the centre, in the
+  kept one's median just left of its lanes (the median wide enough for it), to
+  ``CONTINUATION_GAP_M`` short of that terminal, so the ramps between them are short
+  and move over by about a lane, as a merge from the left does.
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
   from the axis; where ramps leave or join a carriageway on its left (they run
   in the median) the median is wider by two ramp lanes and shoulders.
