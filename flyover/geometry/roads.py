@@ -40,7 +40,8 @@ from flyover.geometry.chains import continuations, ends, road_of, terminal, wrap
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label, Topology
 
-__all__ = ["RoadLine", "layout_roads", "road_bands", "CONTINUATION_GAP_M", "CONTINUATION_SIDE_M"]
+__all__ = ["RoadLine", "layout_roads", "road_bands", "CONTINUATION_GAP_M",
+           "CONTINUATION_SIDE_M"]
 
 #: how far short of its partner's terminal an expressway that continues it ends (m;
 #: :func:`flyover.geometry.chains.continuations`): room for the ramps there to move aside
@@ -150,7 +151,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             taken += legs(e, opts[e])
         for c in conts:
             b = c.through
-            opts[b] = leg(c.kept, opts[c.kept]) + np.pi - (leg(b, 0.0))
+            opts[b] = leg(c.kept, opts[c.kept]) + np.pi - leg(b, 0.0)
         return opts
 
     base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
