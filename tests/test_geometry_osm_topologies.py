@@ -177,3 +177,63 @@ def test_columbus_connector_goes_round_the_loop_off_the_collector_road():
     assert not {frozenset((c.ramp, c.other)) for c in ramp_crossings(g)} & {
         frozenset(("r11", "r6"))}
     assert not same_level_conflicts(g)
+
+
+def _continued_t():
+    """A through expressway A and two ending here that continue one another on one line
+    (DC's I-66 and Potomac Freeway, file 26): C1 ends into u, which joins B1 on its left;
+    v leaves B2 on its left and C2 begins from it. B also ends into q and begins from p,
+    ramps to A (it keeps its terminal, room for them to climb there)."""
+    c = Connection
+    return Topology.build(
+        "continued_t", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2")],
+        [Ramp(x) for x in "pquv"],
+        [c("A1", "p", Label.OUT_L, 0.3), c("p", "B1", Label.IN_M),
+         c("B2", "q", Label.OUT_M), c("q", "A2", Label.IN_R, 0.7),
+         c("C1", "u", Label.OUT_M), c("u", "B1", Label.IN_L, 0.5),
+         c("B2", "v", Label.OUT_L, 0.3), c("v", "C2", Label.IN_M)])
+
+
+def test_expressways_that_continue_one_another_are_laid_out_as_one_line():
+    """C goes on past the centre to 40 m short of B's terminal, in B's median beside its
+    lanes: u and v, which join (leave) B on its left, are short level ramps along the
+    line that move over by about a lane, as real ones do (DC's r3 and r4: 63 and 61 m).
+    Before, C and B were two half lines each ending at its own terminal (682 m apart
+    here), C's lanes across B's: u and v ran 841 and 753 m (seed 1), and their slope was
+    drawn."""
+    from flyover.geometry.chains import continuations  # noqa: PLC0415
+    from flyover.geometry.check import same_level_conflicts  # noqa: PLC0415
+    from flyover.geometry.roads import CONTINUATION_GAP_M  # noqa: PLC0415
+
+    t = _continued_t()
+    st = LayoutSettings()
+    feats = {r: RampFeatures(200.0, 4.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, st, 0)
+    r = b.roads
+    [cont] = continuations(t)
+    assert (cont.kept, cont.through, cont.meets) == ("B", "C", True)
+
+    def point(road, s):
+        return np.array(road.origin) + s * np.array([np.cos(road.heading), np.sin(road.heading)])
+
+    for ending, beginning in (("C1", "B1"), ("B2", "C2")):
+        e, s = r[ending], r[beginning]
+        assert abs(np.sin(e.heading - s.heading)) < 1e-9 and np.cos(e.heading - s.heading) > 0
+        gap = point(s, s.t_lo) - point(e, e.t_hi)
+        along = gap @ np.array([np.cos(s.heading), np.sin(s.heading)])
+        assert along == pytest.approx(CONTINUATION_GAP_M)
+    # C runs in B's median, its lanes just clear of B's: u and v move over by about a
+    # lane (a real merge from the left); u joins B1 (v leaves B2) soon after its start
+    # (before its end)
+    left = np.array([-np.sin(r["B1"].heading), np.cos(r["B1"].heading)])
+    side = (np.array(r["C1"].origin) - np.array(r["B1"].origin)) @ left
+    assert 0.0 < side - r["C1"].lanes * st.lane_width_m <= 2.0
+    rail = b.windows.rail("u", feats["u"], ("B1", Label.IN_L), False, False, st.ramp_lane_width_m)
+    assert rail.hi - r["B1"].t_lo <= 1.5 * st.gap_m
+    assert level_ramps(t) == {"u", "v"}
+    ic = build_interchange(t, {}, {**feats, "u": RampFeatures(float("inf"), 0.0),
+                                   "v": RampFeatures(float("inf"), 0.0)}, seed=1)
+    fits = {o.ramp: o.fit for o in ic.outcomes}
+    assert all(f.ok for f in fits.values()), {k: f.ok for k, f in fits.items()}
+    assert fits["u"].length_m < 150.0 and fits["v"].length_m < 150.0
+    assert not same_level_conflicts(ic.geometry)

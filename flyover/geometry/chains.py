@@ -11,17 +11,23 @@ Decides the *kind* of a ramp; reads the topology and the road layout (headings).
   not from the parents' local headings: a collector-distributor road with a
   small radius wiggles.
 * A stub has no end (it splits into other ramps) or no start (formed by merging).
+* Two expressways that both end here *continue one another* (:func:`continuations`)
+  when traffic runs from each straight on to the other: in both directions a ramp
+  leaves a carriageway that ends here and joins one that begins here, with ``Out-M``
+  or ``In-M`` at one end (a freeway whose name changes at a junction: DC's I-66 and
+  the Potomac Freeway).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
 
 from flyover.topology.model import Kind, Label, Topology
 
-__all__ = ["wrap", "ends", "road_of", "terminal", "Movements"]
+__all__ = ["wrap", "ends", "road_of", "terminal", "Continuation", "continuations", "Movements"]
 
 
 def wrap(a: float) -> float:
@@ -70,11 +76,64 @@ def terminal(topo: Topology, road: str) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class Continuation:
+    """Two expressways ending here that continue one another (:func:`continuations`).
+
+    ``kept`` keeps its terminal: it also ends into (begins from) a ramp to a third road,
+    which needs the room there to climb; ``through`` runs on past the centre to it
+    (``meets``), unless it too has such a ramp. ``ramps``: the ramp from ``through``
+    to ``kept`` and the one from ``kept`` to ``through``."""
+
+    kept: str
+    through: str
+    ramps: tuple[str, str]
+    meets: bool
+
+
+def continuations(topo: Topology) -> list[Continuation]:
+    """The pairs of expressways ending here that continue one another on one line: in
+    both directions a ramp runs from a carriageway of one that ends here to one of the
+    other that begins here, straight on at one of its ends (``Out-M`` or ``In-M``)."""
+    exp = {r: e for e, rs in topo.expressways.items() for r in rs}
+    link: dict[tuple[str, str], str] = {}
+    for ramp in sorted(topo.ramps):
+        start, end = ends(topo, ramp)
+        if start is None or end is None or start[0] not in exp or end[0] not in exp:
+            continue
+        a, b = start[0], end[0]
+        if exp[a] != exp[b] and terminal(topo, a) == "end" and terminal(topo, b) == "start" \
+                and (start[1] is Label.OUT_M or end[1] is Label.IN_M):
+            link.setdefault((exp[a], exp[b]), ramp)
+
+    def third(e: str, pair: set[str]) -> bool:
+        """Whether ``e`` ends into (begins from) a ramp to a road outside ``pair``."""
+        g = topo.graph
+        for r in topo.expressways[e]:
+            for _, v, d in g.out_edges(r, data=True):
+                if d["label"] is Label.OUT_M and exp.get(road_of(topo, v, True)) not in pair:
+                    return True
+            for u, _, d in g.in_edges(r, data=True):
+                if d["label"] is Label.IN_M and exp.get(road_of(topo, u, False)) not in pair:
+                    return True
+        return False
+
+    out, used = [], set()
+    for e, f in sorted(link):
+        if e < f and (f, e) in link and not {e, f} & used:
+            used |= {e, f}
+            kept, through = (f, e) if third(f, {e, f}) and not third(e, {e, f}) else (e, f)
+            out.append(Continuation(kept, through, (link[(through, kept)], link[(kept, through)]),
+                                    not third(through, {e, f})))
+    return out
+
+
 class Movements:
     """The kind and movement of every ramp of ``topo`` on the laid-out ``roads``."""
 
     def __init__(self, topo: Topology, roads: Mapping):
         self.topo, self.roads, self.g = topo, roads, topo.graph
+        self.continuing = frozenset(r for c in continuations(topo) for r in c.ramps)
 
     def ends(self, ramp: str):
         return ends(self.topo, ramp)

@@ -86,7 +86,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
-from flyover.geometry.chains import Movements
+from flyover.geometry.chains import Movements, continuations
 from flyover.geometry.chains import ends as _ends
 from flyover.geometry.levels import LevelPlan
 from flyover.geometry.profile import climb_distance
@@ -106,8 +106,9 @@ TURNING_RAD = 0.5
 
 
 def level_ramps(topology: Topology) -> frozenset[str]:
-    """The ramps the layout necessarily keeps level: both ends on one road, and a
-    collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
+    """The ramps the layout necessarily keeps level: both ends on one road, a ramp
+    between two expressways that continue one another (on one line, one level:
+    :func:`flyover.geometry.chains.continuations`), and a collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
     on the road layout of :mod:`flyover.geometry.roads`, which does not depend on the
     sample).
 
@@ -120,7 +121,8 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     -------
     frozenset of str
         Ramp ids whose start (``Out-*``) and end (``In-*``) attach to the same
-        road, e.g. collector-distributor roads, and split stubs that go on level.
+        road, e.g. collector-distributor roads, ramps straight on from one expressway
+        to the next, and split stubs that go on level.
     """
     g = topology.graph
     out = set()
@@ -131,6 +133,8 @@ def level_ramps(topology: Topology) -> frozenset[str]:
             stubs.append(ramp)
         if start and end and start[0] == end[0] and g.nodes[start[0]]["kind"] is Kind.ROAD:
             out.add(ramp)
+    # a ramp from an expressway to one it continues runs along their line, on their level
+    out |= {ramp for c in continuations(topology) for ramp in c.ramps}
     if stubs:  # a collector road's second stub goes on level
         st = LayoutSettings()
         plan = LevelPlan(Movements(topology, layout_roads(topology, {}, st)), {}, st)

@@ -30,6 +30,9 @@ attachments) and the ramp's targets.
   holds a level part, else where its parent is no steeper than the ramp's slope target:
   it starts (ends) at its parent's grade there (:mod:`flyover.geometry.profile`), so
   that grade counts toward its slope.
+* A ramp straight on from one expressway to the next that continues it
+  (:func:`flyover.geometry.chains.continuations`) attaches within ``gap_m / 2`` beyond
+  ``gap_m`` from where its road ends (begins), as short as real ones are.
 * A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
   crossing; any other ramp within what it needs (``bound``, from
   :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
@@ -119,6 +122,9 @@ class AttachmentWindows:
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
             if lo > hi - 1.0:  # a half line begins (ends) beyond the room: as far again
                 lo, hi = (hi - (reach - tz), hi) if before else (lo, lo + reach - tz)
+            if ramp in moves.continuing:  # straight on to the next expressway: by its end
+                lo, hi = (r.t_hi - 1.5 * st.gap_m, r.t_hi - st.gap_m) if is_start else \
+                    (r.t_lo + st.gap_m, r.t_lo + 1.5 * st.gap_m)
             if pos is not None:
                 for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
                     round_loop = moves.goes_round_loop(ramp, other, road)

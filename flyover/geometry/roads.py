@@ -16,6 +16,13 @@ settings.
   there). Each through expressway is on its own level (0, 1, ...); the
   terminating ones, which never meet, share the level above them (a T's
   terminating expressway above the through one).
+* Two expressways ending here that continue one another
+  (:func:`flyover.geometry.chains.continuations`: DC's I-66 and Potomac Freeway) are
+  one line, placed as a through expressway is: the one with ramps to a third road at
+  its terminal (the *kept* one) keeps it; its partner runs on past the centre, in the
+  kept one's median just left of its lanes (the median wide enough for it), to
+  ``CONTINUATION_GAP_M`` short of that terminal, so the ramps between them are short
+  and move over by about a lane, as a merge from the left does.
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
   from the axis; where ramps leave or join a carriageway on its left (they run
   in the median) the median is wider by two ramp lanes and shoulders.
@@ -29,11 +36,18 @@ from typing import Mapping
 
 import numpy as np
 
-from flyover.geometry.chains import ends, road_of, terminal, wrap
+from flyover.geometry.chains import continuations, ends, road_of, terminal, wrap
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label, Topology
 
-__all__ = ["RoadLine", "layout_roads", "road_bands"]
+__all__ = ["RoadLine", "layout_roads", "road_bands", "CONTINUATION_GAP_M",
+           "CONTINUATION_SIDE_M"]
+
+#: how far short of its partner's terminal an expressway that continues it ends (m;
+#: :func:`flyover.geometry.chains.continuations`): room for the ramps there to move aside
+CONTINUATION_GAP_M = 40.0
+#: how far left of its partner's lanes it runs, in that one's median (m)
+CONTINUATION_SIDE_M = 1.0
 
 
 @dataclass(frozen=True)
@@ -57,15 +71,27 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     """Every carriageway of ``topo`` laid out (see the module doc)."""
     exps = topo.expressways
     term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
-    order = sorted(exps, key=lambda e: (term_of[e], e))
+    conts = continuations(topo)
+    kept_of = {c.kept: c for c in conts}  # a pair is placed by its kept expressway
+    through_of = {c.through: c for c in conts}
+    pair = {e: {c.kept, c.through} for c in conts for e in (c.kept, c.through)}
+    order = sorted(exps, key=lambda e: (term_of[e], e not in kept_of, e))
     g = topo.graph
     # ramps leaving or joining a carriageway on its left run in the median: widen it
     left = {e: any(d["label"] in (Label.OUT_L, Label.IN_L) and (u in rs or v in rs)
                    for u, v, d in g.edges(data=True)) for e, rs in exps.items()}
     wide = 2 * (st.ramp_lane_width_m + st.shoulder_width_m)
     median = {e: st.median_m + (wide if left[e] else 0.0) for e in exps}
-    half = {e: median[e] / 2 + max(lanes.get(r, st.default_lanes) for r in rs) * st.lane_width_m
-            + st.shoulder_width_m for e, rs in exps.items()}
+    for c in conts:  # the through one runs in the kept one's median, beside its lanes
+        room = max(lanes.get(r, st.default_lanes) for r in exps[c.through]) * st.lane_width_m
+        median[c.kept] = max(median[c.kept], st.median_m + 2 * (room + CONTINUATION_SIDE_M))
+    ref = {r: median[e] / 2 for e, rs in exps.items() for r in rs}  # median edge from the axis
+    for c in conts:
+        for r in exps[c.through]:
+            ref[r] = median[c.kept] / 2 - lanes.get(r, st.default_lanes) * st.lane_width_m \
+                - CONTINUATION_SIDE_M
+    half = {e: max(ref[r] for r in rs) + max(lanes.get(r, st.default_lanes) for r in rs)
+            * st.lane_width_m + st.shoulder_width_m for e, rs in exps.items()}
 
     # each through expressway on its own level; the terminating ones (half lines in
     # directions of their own: they never meet) on the one above them all
@@ -78,48 +104,62 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             k = level[e]
             rs = exps[e]
             h1 = options[e]
+            other = max([half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
+            inner = other + st.terminal_m + terminal_extra  # from the centre along its leg
+            if e in through_of and through_of[e].meets:  # on past the centre to its partner
+                inner = -(inner - CONTINUATION_GAP_M)
             for i, r in enumerate(rs):
                 h = h1 if i == 0 else h1 + np.pi
-                o = (median[e] / 2) * np.array([np.sin(h), -np.cos(h)])
-                other = max([half[x] for x in exps if x != e] or [0.0])
+                o = ref[r] * np.array([np.sin(h), -np.cos(h)])
                 term = terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
                 if term == "end":
-                    t_hi = -(other + st.terminal_m + terminal_extra)
+                    t_hi = -inner
                 elif term == "start":
-                    t_lo = other + st.terminal_m + terminal_extra
+                    t_lo = inner
                 n = lanes.get(r, st.default_lanes)
                 roads[r] = RoadLine(r, e, int(n), k, k * st.level_height_m,
                                     (float(o[0]), float(o[1])), float(wrap(h)), t_lo, t_hi,
                                     half[e])
         return roads
 
+    def leg(e: str, h: float) -> float:
+        """The direction from the centre in which ``e``, ending here, runs (heading ``h``)."""
+        return h if terminal(topo, exps[e][0]) == "start" else h + np.pi
+
     def legs(e: str, h: float) -> list[float]:
         """The directions from the centre in which expressway ``e`` (heading ``h``) runs:
-        both for a through one, one for a T's terminating one (a half line)."""
+        both for a through one or a pair that continue one another, one for a T's
+        terminating one (a half line)."""
         if not term_of[e]:
             return [h, h + np.pi]
-        return [h if terminal(topo, exps[e][0]) == "start" else h + np.pi]
+        return [leg(e, h)] + ([leg(e, h) + np.pi] if e in kept_of else [])
+
+    units = [e for e in order if e not in through_of]
 
     def spread(opts: dict[str, float]) -> dict[str, float]:
         """Headings of the third and further expressways, at 45° steps: each where its
         legs are farthest from those already placed (a half line needs one free
-        direction, a through expressway two opposite ones)."""
-        taken = [a for e in order[:2] for a in legs(e, opts[e])]
-        for e in order[2:]:
+        direction, a through expressway two opposite ones); a pair's through one
+        opposite its kept one."""
+        taken = [a for e in units[:2] for a in legs(e, opts[e])]
+        for e in units[2:]:
             cands = [np.pi / 2 - j * np.pi / 4 for j in range(8)]
             gap = [min((abs(wrap(a - b)) for a in legs(e, h) for b in taken), default=np.pi)
                    for h in cands]
             opts[e] = cands[int(np.argmax(gap))]
             taken += legs(e, opts[e])
+        for c in conts:
+            b = c.through
+            opts[b] = leg(c.kept, opts[c.kept]) + np.pi - leg(b, 0.0)
         return opts
 
-    base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(order[:2])}
+    base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
     best, best_score = None, -1e9
-    for flip in ([False, True] if len(order) > 1 else [False]):
+    for flip in ([False, True] if len(units) > 1 else [False]):
         opts = dict(base)
         if flip:
-            opts[order[1]] += np.pi
+            opts[units[1]] += np.pi
         roads = place(spread(opts))
         score = 0
         for ramp in topo.ramps:

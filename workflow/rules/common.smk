@@ -154,7 +154,11 @@ def class_tables(stage):
 # 24: an outer connector reaching its loop's roads through stubs (Columbus r11 round r6) is
 #     fitted after the loop and round it; a collector road's level second stub (r13) before
 #     the connector forking beside it (r2); catalog unchanged
-GEOMETRY_VERSION = 24
+# 25: expressways ending here that continue one another (DC 26's I-66 and Potomac Freeway)
+#     are one line: the one without ramps to a third road runs on past the centre, in the
+#     other's median, to 40 m short of its terminal; the ramps between them are short and
+#     level (catalog unchanged: no design has such a pair)
+GEOMETRY_VERSION = 25
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
