@@ -1,6 +1,7 @@
 """Layout of whole interchanges: roads, levels, attachments, geometry.json contract."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -494,32 +495,33 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
 
 @pytest.mark.slow
 def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds():
-    """A catalog turbine feature set (sample 57 of the workflow's t=2 array, lA2 at 280 m
-    since inf is no radius of a turning ramp), with one restart and one resample: in the
-    first build lA2 still meets something at its level; a rebuild with other seeds clears
-    it, and the result says so (its seed, first-try failure and all the effort)."""
+    """A catalog turbine feature set (sample 25 of the workflow's t=2 array), with one
+    restart and one resample: in the first build rB2 still meets something at its level;
+    a rebuild with other seeds clears it, and the result says so (its seed, first-try
+    failure and all the effort). (Sample 57's lA2 did until geometry 23, which fits the
+    left turns clear of each other's climbs: :mod:`flyover.geometry.approaches`.)"""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
     t = catalog_topologies()["turbine"]
-    lanes = {"A1": 3, "A2": 3, "B1": 4, "B2": 4}
-    targets = {"eA1": (280, 1), "eA2": (40, 2), "eB1": (210, 4), "eB2": (60, 1),
-               "lA1": (30, 4), "lA2": (280, 2), "lB1": (100, 2), "lB2": (150, 2),
-               "rA1": (30, 3), "rA2": (280, 4), "rB1": (60, 2), "rB2": (60, 2)}
+    lanes = {"A1": 5, "A2": 3, "B1": 4, "B2": 4}
+    targets = {"eA1": (280, 4), "eA2": (210, 4), "eB1": (30, 1), "eB2": (100, 4),
+               "lA1": (150, 3), "lA2": (150, 3), "lB1": (40, 1), "lB2": (60, 5),
+               "rA1": (150, 2), "rA2": (30, 5), "rB1": (210, 4), "rB2": (60, 4)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
-    seed = 1191196492
+    seed = 3757061603
     turning = frozenset(r for r in targets if not r.startswith("e"))
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
                              (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), seed, turning)
 
     def build(rebuilds):
-        return build_interchange(t, lanes, feats, class_id="c0", sample=57, seed=seed,
+        return build_interchange(t, lanes, feats, class_id="c0", sample=25, seed=seed,
                                  resampler=domain,
                                  settings=LayoutSettings(rebuilds=rebuilds, restarts=1,
                                                          max_resamples=1))
 
     once = build(0)
     met = {o.ramp: o for o in once.outcomes if o.fit.conflicts}
-    assert list(met) == ["lA2"] and "same-level conflict" in met["lA2"].infeasible
+    assert list(met) == ["rB2"] and "same-level conflict" in met["rB2"].infeasible
     assert once.geometry.seed == seed
     again = build(3)
     assert all(o.fit.conflicts == 0 for o in again.outcomes)
@@ -723,7 +725,9 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     a large loop, and went over or under it (benchmark sample 3: both connectors). The stub
     now ends where a connector at its radius can go round a loop at its radius, and the
     loop keeps off where the connector turns; with both rules off, the same feature set has
-    a connector over (or under) its loop."""
+    a connector over (or under) its loop. (Seed 1 since geometry 23, which fits the
+    flyovers fA1/fA2 otherwise: with seed 2113364338 oA1 then goes over lB1; on seeds 1-8
+    6 of 8 builds are all within targets and round, before and after.)"""
     from flyover.geometry import levels, loop_room  # noqa: PLC0415
 
     t = catalog_topologies()["cloverstack"]
@@ -736,13 +740,13 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
         return {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)} & {
             ("lB1", "oA1"), ("oA1", "lB1"), ("lB2", "oA2"), ("oA2", "lB2")}
 
-    ic = build_interchange(t, lanes, feats, seed=2113364338)
+    ic = build_interchange(t, lanes, feats, seed=1)
     assert all(o.fit.ok for o in ic.outcomes)
     assert not over(ic)
     monkeypatch.setattr(loop_room.LoopRoom, "fences", lambda self, loop: [])
     monkeypatch.setattr(loop_room.LoopRoom, "room_round", lambda self, loop, stub: 0.0)
     monkeypatch.setattr(levels.LevelPlan, "round_room", lambda self, ramp: 0.0)
-    assert over(build_interchange(t, lanes, feats, seed=2113364338))
+    assert over(build_interchange(t, lanes, feats, seed=1))
 
 
 def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():
@@ -772,3 +776,62 @@ def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_th
     # the left crosses the ramps on B and D's level: over them
     assert b.plan[left[0]] == pytest.approx(z_roads + st.level_height_m)
     assert right[0] not in b.plan
+
+
+def test_a_planned_ramp_reserves_its_climb_from_a_fixed_end():
+    """An upper left turn starting on a stub's free end (a point) reserves the straight
+    lead it climbs on: from its lane centre at the stub's end, along the end's heading,
+    rising at its slope target from the end's height to its crest; an end on a road
+    (a window, not a point) and a ramp without a crest reserve nothing."""
+    from flyover.geometry.approaches import approaches  # noqa: PLC0415
+    from flyover.geometry.fit import Rail, RampSpec  # noqa: PLC0415
+    from flyover.geometry.profile import climb_distance  # noqa: PLC0415
+
+    s = np.linspace(0.0, 300.0, 301)
+    stub = Rail("eB2", "Out-L", s, np.stack([-s, np.full_like(s, 20.0)], -1),
+                np.full_like(s, np.pi), np.full_like(s, 12.0), 0.0, 300.0, 300.0)
+    road = Rail.line("A2", "In-R", (0.0, 0.0), -np.pi / 2, 0.0, -15.0, -900.0, -700.0)
+    spec = RampSpec("lB2", stub, road, None, 1.5, 3, 4.0, 100.0, 2.0, z_crest=19.5)
+    (a,) = approaches(spec, 40.0)
+    assert a.ramp == "lB2" and a.half_width_m == 2.0
+    # starts at the lane centre (2 m right of the reference line, heading -x: +y)
+    assert np.allclose(a.xy[0], (-300.0, 22.0))
+    assert np.allclose(a.xy[:, 1], 22.0) and np.all(np.diff(a.xy[:, 0]) < 0)  # along -x
+    length = float(climb_distance(7.5, 0.02, 40.0))
+    assert abs(np.hypot(*(a.xy[-1] - a.xy[0])) - length) < 1e-6
+    assert np.max(np.hypot(*np.diff(a.xy, axis=0).T)) <= 2.0  # as dense as fitted ramps
+    assert a.z[0] == pytest.approx(12.0) and a.z[-1] == pytest.approx(19.5)
+    grade = np.diff(a.z) / np.hypot(*np.diff(a.xy, axis=0).T)
+    assert grade.min() >= -1e-9 and grade.max() <= 0.02 + 1e-9
+    # joining the stub's start instead: the approach runs back from it, against its heading
+    back = replace(spec, start=road, end=replace(stub, lo=0.0, hi=0.0))
+    (b,) = approaches(back, 40.0)
+    assert np.allclose(b.xy[0], (0.0, 22.0)) and np.all(np.diff(b.xy[:, 0]) > 0)
+    assert approaches(replace(spec, z_crest=None), 40.0) == []
+    assert approaches(replace(spec, start=road), 40.0) == []  # both ends on roads
+
+
+@pytest.mark.slow
+def test_an_upper_left_turn_of_a_stack_clears_the_lower_one_at_its_first_try():
+    """stack4 feature set 7 of the workflow (t=2 array, config seed): the lower left turn
+    lA2 landed on mB1's free end after crossing B right beside eB2's free end, where the
+    upper left turn lB2 starts at the same height; no shape of lB2 between its fixed ends
+    cleared lA2 (a same-level conflict at its first try). Fitted clear of lB2's climb from
+    eB2 (:mod:`flyover.geometry.approaches`), lA2 crosses where lB2 is a level above it,
+    and every ramp meets its targets at the first try."""
+    from flyover.config import load_config  # noqa: PLC0415
+
+    t = catalog_topologies()["stack4"]
+    lanes = {"A1": 5, "A2": 5, "B1": 4, "B2": 4}
+    targets = {"eA1": (30, 3), "eA2": (30, 1), "eB1": (30, 3), "eB2": (30, 4),
+               "lA1": (30, 4), "lA2": (100, 4), "lB1": (30, 1), "lB2": (30, 2),
+               "mA1": (math.inf, 3), "mA2": (210, 4), "mB1": (150, 2), "mB2": (150, 2),
+               "rA1": (100, 1), "rA2": (40, 4), "rB1": (150, 2), "rB2": (150, 5)}
+    feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
+    st = LayoutSettings.from_config(load_config()["geometry"])
+    ic = build_interchange(t, lanes, feats, class_id="c0", sample=7, seed=402799872,
+                           settings=replace(st, rebuilds=0, max_resamples=0))
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["lA2"].fit.z_crest == 13.0 and out["lB2"].fit.z_crest == 19.5
+    assert [r for r, o in out.items() if not o.first_try_ok] == []
+    assert not same_level_conflicts(ic.geometry)

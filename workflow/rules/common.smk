@@ -145,7 +145,9 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-GEOMETRY_VERSION = 22
+# 23: a direct left turn is first fitted at its planned level (not lifted) and clear of where
+#     the left turns fitted after it climb from their fixed stub ends (approaches.py)
+GEOMETRY_VERSION = 23
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
