@@ -495,33 +495,32 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
 
 @pytest.mark.slow
 def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds():
-    """A catalog turbine feature set (sample 25 of the workflow's t=2 array), with one
-    restart and one resample: in the first build rB2 still meets something at its level;
-    a rebuild with other seeds clears it, and the result says so (its seed, first-try
-    failure and all the effort). (Sample 57's lA2 did until geometry 23, which fits the
-    left turns clear of each other's climbs: :mod:`flyover.geometry.approaches`.)"""
+    """A catalog turbine feature set (sample 57 of the workflow's t=2 array, lA2 at 280 m
+    since inf is no radius of a turning ramp), with one restart and one resample: in the
+    first build lA2 still meets something at its level; a rebuild with other seeds clears
+    it, and the result says so (its seed, first-try failure and all the effort)."""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
     t = catalog_topologies()["turbine"]
-    lanes = {"A1": 5, "A2": 3, "B1": 4, "B2": 4}
-    targets = {"eA1": (280, 4), "eA2": (210, 4), "eB1": (30, 1), "eB2": (100, 4),
-               "lA1": (150, 3), "lA2": (150, 3), "lB1": (40, 1), "lB2": (60, 5),
-               "rA1": (150, 2), "rA2": (30, 5), "rB1": (210, 4), "rB2": (60, 4)}
+    lanes = {"A1": 3, "A2": 3, "B1": 4, "B2": 4}
+    targets = {"eA1": (280, 1), "eA2": (40, 2), "eB1": (210, 4), "eB2": (60, 1),
+               "lA1": (30, 4), "lA2": (280, 2), "lB1": (100, 2), "lB2": (150, 2),
+               "rA1": (30, 3), "rA2": (280, 4), "rB1": (60, 2), "rB2": (60, 2)}
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
-    seed = 3757061603
+    seed = 1191196492
     turning = frozenset(r for r in targets if not r.startswith("e"))
     domain = DomainResampler((30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf),
                              (1.0, 2.0, 3.0, 4.0, 5.0), frozenset(), seed, turning)
 
     def build(rebuilds):
-        return build_interchange(t, lanes, feats, class_id="c0", sample=25, seed=seed,
+        return build_interchange(t, lanes, feats, class_id="c0", sample=57, seed=seed,
                                  resampler=domain,
                                  settings=LayoutSettings(rebuilds=rebuilds, restarts=1,
                                                          max_resamples=1))
 
     once = build(0)
     met = {o.ramp: o for o in once.outcomes if o.fit.conflicts}
-    assert list(met) == ["rB2"] and "same-level conflict" in met["rB2"].infeasible
+    assert list(met) == ["lA2"] and "same-level conflict" in met["lA2"].infeasible
     assert once.geometry.seed == seed
     again = build(3)
     assert all(o.fit.conflicts == 0 for o in again.outcomes)
@@ -725,9 +724,7 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     a large loop, and went over or under it (benchmark sample 3: both connectors). The stub
     now ends where a connector at its radius can go round a loop at its radius, and the
     loop keeps off where the connector turns; with both rules off, the same feature set has
-    a connector over (or under) its loop. (Seed 1 since geometry 23, which fits the
-    flyovers fA1/fA2 otherwise: with seed 2113364338 oA1 then goes over lB1; on seeds 1-8
-    6 of 8 builds are all within targets and round, before and after.)"""
+    a connector over (or under) its loop."""
     from flyover.geometry import levels, loop_room  # noqa: PLC0415
 
     t = catalog_topologies()["cloverstack"]
@@ -740,13 +737,13 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
         return {(c.ramp, c.other) for c in ramp_crossings(ic.geometry)} & {
             ("lB1", "oA1"), ("oA1", "lB1"), ("lB2", "oA2"), ("oA2", "lB2")}
 
-    ic = build_interchange(t, lanes, feats, seed=1)
+    ic = build_interchange(t, lanes, feats, seed=2113364338)
     assert all(o.fit.ok for o in ic.outcomes)
     assert not over(ic)
     monkeypatch.setattr(loop_room.LoopRoom, "fences", lambda self, loop: [])
     monkeypatch.setattr(loop_room.LoopRoom, "room_round", lambda self, loop, stub: 0.0)
     monkeypatch.setattr(levels.LevelPlan, "round_room", lambda self, ramp: 0.0)
-    assert over(build_interchange(t, lanes, feats, seed=1))
+    assert over(build_interchange(t, lanes, feats, seed=2113364338))
 
 
 def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():

@@ -16,8 +16,12 @@ climbs along its stub's heading. So each fixed end of a planned ramp not fitted 
 reserves its *approach*: the straight lead it may climb on
 (:meth:`flyover.geometry.specs.RampSpecs._leads`), at the heights of its profile
 climbing from that end at its slope target to its crest. An earlier left turn is
-first fitted with the approaches as obstacles (the build loop falls back to a fit
-without them when it cannot meet its targets so).
+first fitted with the approaches as obstacles and at its planned level (lifted, it
+would be on the upper turns' level: they then met it in the middle); the build loop
+falls back to a fit without either when it cannot meet its targets so. Only left
+turns with both ends on stubs reserve anything
+(:meth:`flyover.geometry.state.LayoutState.approaches`): one with an end on a road
+still chooses where it attaches there.
 """
 
 from __future__ import annotations

@@ -14,7 +14,12 @@ and the ramps already fitted:
    whose outer connector leaves a stub fitted before it is first fitted inside
    the fences that leave that connector room to go round it
    (:meth:`flyover.geometry.rails.AttachmentWindows.fences`; if it cannot meet
-   its targets so, as any other ramp);
+   its targets so, as any other ramp); a direct left turn fitted before other
+   direct left turns whose ends are already fixed (a four-level stack's lower
+   level, on stubs) is first fitted at its planned level, not lifted, and clear of
+   where those climb from their fixed ends
+   (:mod:`flyover.geometry.approaches`; if it cannot meet its targets so, as any
+   other ramp);
 1. a ramp that still conflicts is lifted to the next level (a flyover);
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb

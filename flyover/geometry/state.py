@@ -68,8 +68,11 @@ class LayoutState:
 
     def approaches(self, ramp: str) -> tuple[Approach, ...]:
         """The approaches (:func:`flyover.geometry.approaches.approaches`) of the planned
-        ramps other than ``ramp`` not fitted yet whose parents are fitted, when ``ramp``
-        is a planned ramp itself (a direct left turn fitted before them)."""
+        ramps other than ``ramp`` not fitted yet that start and end on fitted ramps (a
+        four-level stack's left turns, between two stubs' free ends), when ``ramp`` is a
+        planned ramp itself (a direct left turn fitted before them). A left turn with an
+        end on a road (a turbine's, a cloverstack's) still chooses where it attaches
+        there: none."""
         if ramp not in self.plan:
             return ()
         out = []
@@ -77,8 +80,8 @@ class LayoutState:
             if other == ramp or other not in self.plan or other in self.fits \
                     or other not in self.features:
                 continue
-            if any(e is not None and e[0] not in self.roads and e[0] not in self.fits
-                   for e in ends(self.topo, other)):
+            if not all(e is not None and e[0] not in self.roads and e[0] in self.fits
+                       for e in ends(self.topo, other)):
                 continue
             out += approaches(self.spec(other, self.features[other]), self.st.fit.transition_m)
         return tuple(out)
