@@ -145,8 +145,9 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-# 23: a direct left turn is first fitted at its planned level (not lifted) and clear of where
-#     the left turns fitted after it climb from their fixed stub ends (approaches.py)
+# 23: a four-level stack's left turns between stub ends: those fitted first stay at their
+#     planned level (not lifted) and clear of where the later ones climb from their fixed
+#     ends, if they can (approaches.py); other designs unchanged
 GEOMETRY_VERSION = 23
 
 
