@@ -407,9 +407,12 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     """Rip-up and reroute: on these targets (a catalog feature set, with rA1 at 280 m: inf
     is no radius of a turning ramp) the directional T's right turn rR, fitted after the
     left turn rL, still meets it; rL is fitted again around rR and every ramp then meets
-    its targets with no same-level conflict."""
+    its targets with no same-level conflict. (Without the fences that now keep the two
+    branches of B1's terminal on their own sides, :mod:`flyover.geometry.terminals`,
+    which spare rR that conflict in the first place.)"""
     from flyover.geometry import build  # noqa: PLC0415
 
+    monkeypatch.setattr(build, "terminal_fences", lambda *a: [])
     t = catalog_topologies()["directional_t"]
     lanes = {"A1": 4, "A2": 5, "B1": 5, "B2": 4}
     feats = {"rA1": RampFeatures(280.0, 3.0), "rA2": RampFeatures(100.0, 4.0),
@@ -559,9 +562,14 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     for w in np.linspace(0.5, by["r2"].fit.spec.width_m, 5):
         lat = (stn["xy"][k] + w * left - np.array(r4.start)) @ np.array([-d[1], d[0]])
         assert not (-r4.lanes * st.lane_width_m <= lat <= 0.0)
-    # without the room rule, the same build squeezes r2 in beside R4
+    # without the room rule (nor the fence that now keeps r3 a lane off R4 outside its
+    # window, flyover.geometry.beside, which spares r2 the squeeze too), the same build
+    # squeezes r2 in beside R4
+    from flyover.geometry import build  # noqa: PLC0415
+
     monkeypatch.setattr(rails.AttachmentWindows, "room_beside",
                         lambda self, parent, off, width, lo, hi: (lo, hi))
+    monkeypatch.setattr(build, "child_room_fences", lambda *a: [])
     squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=3653403231, settings=st)
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
 
@@ -593,9 +601,13 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
     assert all(o.first_try_ok for o in ic.outcomes)
     jumps = _grade_jumps(ic.geometry)
     assert len(jumps) == 2 and max(jumps) <= 0.5
-    # without the rule, the same build joins r3 on its grade
+    # without the rule (nor the fence keeping r3 off R4 outside its window, with which r2
+    # finds room where r3 is level anyway), the same build joins r3 on its grade
+    from flyover.geometry import build  # noqa: PLC0415
+
     monkeypatch.setattr(rails.AttachmentWindows, "level_part",
                         lambda self, parent, lo, hi, limit=None: (lo, hi))
+    monkeypatch.setattr(build, "child_room_fences", lambda *a: [])
     anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=4, settings=st)
     g = anywhere.geometry
     _, on_r3 = evaluate_polys(g.ramp("r3").elevation, np.array([g.ramp("r2").end.s_m]))
@@ -701,10 +713,15 @@ def test_a_five_leg_interchange_builds_and_exports_with_attachments_on_their_roa
     assert b"<road " in xodr_bytes(g)
 
 
-def test_a_ramp_attached_on_its_parents_grade_starts_and_ends_at_that_grade():
+def test_a_ramp_attached_on_its_parents_grade_starts_and_ends_at_that_grade(monkeypatch):
     """J1's r2 (2 % target) joins r3 (2 %) on r3's climb (benchmark sample 3): its profile
     ended level, a 2 pp kink where the two lanes meet. Now it ends at r3's grade there,
-    and its own slope stays within its target."""
+    and its own slope stays within its target. (Without the fence keeping r3 off R4
+    outside its window, :mod:`flyover.geometry.beside`, with which r2 finds room where r3
+    is level in this feature set.)"""
+    from flyover.geometry import build  # noqa: PLC0415
+
+    monkeypatch.setattr(build, "child_room_fences", lambda *a: [])
     t = catalog_topologies()["j1"]
     feats = {"r1": RampFeatures(40.0, 1.0), "r2": RampFeatures(60.0, 2.0),
              "r3": RampFeatures(30.0, 2.0), "r4": RampFeatures(280.0, 1.0)}

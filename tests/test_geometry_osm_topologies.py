@@ -121,3 +121,59 @@ def test_a_ramp_merging_along_a_stub_adds_a_lane_beside_it_in_plan_and_in_the_fi
     assert m.end.parent == "c" and m.end.offset_m == pytest.approx(-c_width)
     ok, detail = check_continuity(read_xodr(BytesIO(xodr_bytes(g))))
     assert ok, detail
+
+
+def _collector_round():
+    """The synthetic 4-leg's collector road (e off A1, c beside A1 under B, the loop k to
+    B2) with Columbus's other corner of that quadrant: the stub s leaves B2 and splits into
+    o, the right turn to A1 round the loop k (Columbus's r11 off r1 round r6), and w, the
+    left turn to A2 (r3); y leaves c and joins o on its left (r12)."""
+    c = Connection
+    return Topology.build(
+        "collector_round", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2")],
+        [Ramp(x) for x in "eckxysow"],
+        [c("A1", "e", Label.OUT_R, 0.1), c("e", "c", Label.OUT_L), c("e", "x", Label.OUT_R),
+         c("c", "k", Label.OUT_R), c("c", "y", Label.OUT_L), c("k", "B2", Label.IN_R, 0.55),
+         c("x", "B1", Label.IN_R, 0.85), c("y", "o", Label.IN_L),
+         c("B2", "s", Label.OUT_R, 0.15), c("s", "o", Label.OUT_R), c("s", "w", Label.OUT_L),
+         c("o", "A1", Label.IN_R, 0.9), c("w", "A2", Label.IN_R, 0.85)])
+
+
+def test_an_outer_connector_reaching_its_loops_roads_through_stubs_is_fitted_round_it():
+    """o joins B2 and A1, the roads the loop k joins, the other way round, but shares no
+    road with it: o leaves B2 through the stub s, k leaves A1 through e and c. It was not
+    taken for k's outer connector (that needed a road both attach to), so it was fitted
+    before k (in s's round, k after c) and k was then laid across it. Now o comes after k
+    and is fitted with k kept out at every height."""
+    t = _collector_round()
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, st, 0)
+    assert b.moves.is_loop("k")
+    order = b.order()
+    assert order.index("k") < order.index("o") < order.index("y")
+    assert b.moves.goes_round("o", "k")
+    assert not b.moves.goes_round("w", "k") and not b.moves.goes_round("y", "k")
+    for ramp in order[: order.index("o")]:  # everything before o, as the build fits it
+        fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), 1)
+        b.record(ramp, fit)
+    assert b.windows.loops.round_loops("o") == {"k"}
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_connector_goes_round_the_loop_off_the_collector_road():
+    """Columbus: r11 (I-70 West through the stub r1 to I-270 North) is the outer connector
+    of the loop r6 (I-270 North through r8 and r13 to I-70 West). It was fitted before r6,
+    so r6 and r12 had to find room round it (r11 under r6, r12 meeting r11 or r2 at its
+    level). Now it goes round r6 and nothing meets anything at its level."""
+    from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    feats["r13"] = RampFeatures(float("inf"), 0.0)  # level (fixed_features)
+    feats["r11"] = RampFeatures(150.0, 4.0)  # wider than its loop (feasibility.RoundLoop)
+    g = build_interchange(topo, {}, feats).geometry
+    assert not {frozenset((c.ramp, c.other)) for c in ramp_crossings(g)} & {
+        frozenset(("r11", "r6"))}
+    assert not same_level_conflicts(g)

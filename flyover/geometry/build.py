@@ -14,12 +14,16 @@ and the ramps already fitted:
    whose outer connector leaves a stub fitted before it is first fitted inside
    the fences that leave that connector room to go round it
    (:meth:`flyover.geometry.rails.AttachmentWindows.fences`; if it cannot meet
-   its targets so, as any other ramp); a direct left turn fitted before other
-   direct left turns whose ends are already fixed (a four-level stack's lower
-   level, on stubs) is first fitted at its planned level, not lifted, and clear of
-   where those climb from their fixed ends
-   (:mod:`flyover.geometry.approaches`; if it cannot meet its targets so, as any
-   other ramp);
+   its targets so, as any other ramp); so is each branch of a T's terminal, inside
+   the fence that keeps it off its sibling's side until the two are levels apart
+   (:func:`flyover.geometry.terminals.terminal_fences`), and a ramp whose child
+   attaches on the side facing its road, inside the fence that keeps it a lane off that
+   road's edge outside its window (:func:`flyover.geometry.beside.child_room_fences`);
+   a direct left turn fitted before other direct left turns whose ends are
+   already fixed (a four-level stack's lower level, on stubs) is first fitted at
+   its planned level, not lifted, and clear of where those climb from their fixed
+   ends (:mod:`flyover.geometry.approaches`; if it cannot meet its targets so, as
+   any other ramp);
 1. a ramp that still conflicts is lifted to the next level (a flyover);
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb
@@ -52,11 +56,13 @@ from dataclasses import dataclass, replace
 from typing import Callable, Mapping
 
 from flyover.geometry.assemble import assemble
+from flyover.geometry.beside import child_room_fences
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
+from flyover.geometry.terminals import terminal_fences
 from flyover.topology.model import Topology
 
 __all__ = ["RampOutcome", "Interchange", "build_interchange"]
@@ -237,10 +243,14 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                 evals, secs = evals + e2, secs + s2
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
-        if fit is None and (fences := tuple(b.windows.loops.fences(ramp))):
+        if fit is None and (fences := tuple(b.windows.loops.fences(ramp)) + tuple(
+                terminal_fences(b.moves, b.features, st, ramp))
+                + tuple(child_room_fences(b.moves, b.width, st, spec))):
             # a loop whose outer connector leaves a fitted stub keeps off where that one
-            # must turn round it (:meth:`AttachmentWindows.fences`); if it cannot meet its
-            # targets so, it is fitted as any other ramp
+            # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
+            # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
+            # attaches on its road's side off that road's edge (:func:`child_room_fences`);
+            # if it cannot meet its targets so, it is fitted as any other ramp
             fenced, e2, s2 = _fit_with_levels(b, spec, rseed, fences=fences)
             evals, secs = evals + e2, secs + s2
             if fenced.ok and fenced.conflicts == 0:

@@ -140,6 +140,37 @@ class Movements:
         return self.is_loop(other) and not self.is_loop(ramp) and \
             self.other_road(ramp, road) == self.other_road(other, road)
 
+    def through_stubs(self, ramp: str, forward: bool) -> str | None:
+        """The road ``ramp``'s chain reaches forward (backward) through stubs alone: the
+        ramp's end (start), else that of the stub it joins (leaves), and so on (Columbus's
+        loop ``r6`` comes from I-270 North through the stubs ``r13`` and ``r8``). ``None``
+        if the chain passes a ramp with both ends (a collector-distributor road, a
+        connector) or a stub with no end that way (it splits: which road is open)."""
+        node, seen = ramp, {ramp}
+        while True:
+            nxt = ends(self.topo, node)[1 if forward else 0]
+            if nxt is None:
+                return None
+            node = nxt[0]
+            if node in self.roads:
+                return node
+            if node in seen or not self.is_stub(node):
+                return None
+            seen.add(node)
+
+    def goes_round(self, ramp: str, loop: str) -> bool:
+        """Whether ``ramp`` is the outer connector of ``loop`` by their chains: it joins the
+        two roads the loop joins the other way round, each reached directly or through
+        stubs (:meth:`through_stubs`; Columbus's ``r11`` from I-70 West through the stub
+        ``r1`` to I-270 North, round the loop ``r6`` from I-270 North through ``r8`` and
+        ``r13`` to I-70 West). Unlike :meth:`goes_round_loop` it needs no road both attach
+        to themselves."""
+        if ramp == loop or not self.is_loop(loop) or self.is_loop(ramp):
+            return False
+        a, b = self.through_stubs(ramp, False), self.through_stubs(ramp, True)
+        return a is not None and b is not None and a != b \
+            and (b, a) == (self.through_stubs(loop, False), self.through_stubs(loop, True))
+
     def crosses_loop_exit(self, ramp: str, other: str, road: str) -> bool:
         """Whether ``ramp``, joining ``road`` after the loop ``other`` leaves it, has to pass
         over the loop's exit branch: it does unless it comes from the road the loop goes

@@ -6,7 +6,7 @@ LSR, RSL, RLR, LRL; Dubins, Am. J. Math. 79(3), 1957; the closed forms of Shkel 
 Lumelsky, Robotica 19(1), 2001). A ramp that holds its radius target joins its
 attachments by such a path, so the shortest Dubins path between any two points of
 its attachment windows is a lower bound of its length
-(:meth:`flyover.geometry.specs.RampSpecs.length_bound_m`).
+(``least_m`` in ``benchmarks/geometry.py``).
 
 >>> import numpy as np
 >>> float(shortest(np.zeros(2), 0.0, np.array([10.0, 0.0]), 0.0, 5.0)[()])  # straight

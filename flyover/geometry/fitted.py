@@ -1,8 +1,11 @@
 """The ramps fitted so far: their fits, stations and attachments, as later ramps see them.
 
-Decides what a later ramp must avoid (:meth:`FittedRamps.obstacles`) and where the
-ramps already attached to a parent are (:attr:`FittedRamps.attached`); reads the
-road layout, the ramps' kinds and the fits recorded by the build loop.
+Decides what a later ramp must avoid (:meth:`FittedRamps.obstacles`), where the
+ramps already attached to a parent are (:attr:`FittedRamps.attached`) and where a
+ramp's end nominally lies on the ramp it leaves or joins (:meth:`FittedRamps.start_s`,
+:meth:`FittedRamps.end_s`, :meth:`FittedRamps.start_pose`, :meth:`FittedRamps.end_z`,
+:meth:`FittedRamps.heading_at`); reads the road layout, the ramps' kinds and the fits
+recorded by the build loop.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import numpy as np
 
 from flyover.geometry import _kernels
 from flyover.geometry.bezier import sample_spline
-from flyover.geometry.chains import Movements
+from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Obstacles, RampFit
 from flyover.geometry.profile import evaluate_polys
 from flyover.geometry.roads import road_bands
@@ -136,3 +139,45 @@ class FittedRamps:
                 along = (stn["xy"] - np.array(road.origin)) @ d
                 lo_t, hi_t = float(min(t, along.min())), float(max(t, along.max()))
             self.attached.setdefault(end.parent, []).append((pos, lo_t, hi_t, ramp, float(t)))
+
+    def end_z(self, end) -> float:
+        """Height of an end ``(parent, label)``: its road's, or the mean of the fitted
+        ramp's (refined per candidate by the rail)."""
+        node, _ = end
+        if node in self.roads:
+            return self.roads[node].z
+        st = self.stations[node]
+        return float(np.mean(st["z"]))
+
+    def start_s(self, ramp: str, start) -> float:
+        """Nominal station of ``ramp``'s start on the fitted ramp it leaves."""
+        node = start[0]
+        length = self.stations[node]["s"][-1]
+        pos = self.g.edges[(node, ramp)].get("pos")
+        return length if ends(self.moves.topo, node)[1] is None else \
+            (0.4 if pos is None else pos) * length
+
+    def end_s(self, ramp: str, end) -> float:
+        """Nominal station of ``ramp``'s end on the fitted ramp it joins."""
+        node = end[0]
+        length = self.stations[node]["s"][-1]
+        pos = self.g.edges[(ramp, node)].get("pos")
+        return 0.0 if ends(self.moves.topo, node)[0] is None else \
+            (0.6 if pos is None else pos) * length
+
+    def start_pose(self, ramp: str, start) -> tuple[np.ndarray, float]:
+        """Nominal point and heading of ``ramp``'s start on the fitted ramp it leaves."""
+        st = self.stations[start[0]]
+        s = self.start_s(ramp, start)
+        xy = np.array([np.interp(s, st["s"], st["xy"][:, k]) for k in (0, 1)])
+        return xy, float(np.interp(s, st["s"], st["heading"]))
+
+    def heading_at(self, ramp: str, end, is_start: bool) -> float:
+        """Nominal heading of ``ramp``'s start (end) ``end``: its road's, or the fitted
+        parent's at :meth:`start_s` (:meth:`end_s`)."""
+        node, _ = end
+        if node in self.roads:
+            return self.roads[node].heading
+        st = self.stations[node]
+        s = self.start_s(ramp, end) if is_start else self.end_s(ramp, end)
+        return float(np.interp(s, st["s"], st["heading"]))

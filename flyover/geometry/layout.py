@@ -9,7 +9,9 @@ layout has one home, which opens with what it decides and what it reads:
 :mod:`flyover.geometry.roads`        road layout: carriageway lines, extents, levels
 :mod:`flyover.geometry.levels`       level plan: crests of the flyovers, stub heights, room
 :mod:`flyover.geometry.rails`        attachment windows: where along a parent a ramp attaches
-:mod:`flyover.geometry.specs`        ramp specs: turn, pieces, free end, leads, crest
+:mod:`flyover.geometry.loop_room`    room between a loop and the connector round it
+:mod:`flyover.geometry.free_end`     a stub's free end: height, how far out, beside what
+:mod:`flyover.geometry.specs`        ramp specs: turn, pieces, length bound, leads, crest
 :mod:`flyover.geometry.fitted`       the ramps fitted so far, as obstacles and parents
 :mod:`flyover.geometry.collector`    collector-distributor roads (no search)
 :mod:`flyover.geometry.state`        one build's parts wired together

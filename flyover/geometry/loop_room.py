@@ -80,8 +80,9 @@ class LoopRoom:
 
     def round_loops(self, ramp: str) -> frozenset[str]:
         """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
-        joining the same two roads the other way round, on the road they share)."""
-        out = set()
+        joining the same two roads the other way round, on the road they share, or with
+        its chain through stubs: :meth:`flyover.geometry.chains.Movements.goes_round`)."""
+        out = {other for other in self.fitted.fits if self.moves.goes_round(ramp, other)}
         for end in ends(self.topo, ramp):
             if end is None or end[0] not in self.roads:
                 continue

@@ -96,21 +96,34 @@ class LayoutState:
         """The order ramps are fitted in: parents first; in one round, stubs and
         road-to-road ramps in id order, a low connector between two ramps (a stack's
         right turn: no freedom where it attaches) before the flyovers, which then pass
-        over it."""
+        over it, and a collector road's second stub (:meth:`LevelPlan.continues_level`:
+        level, at its parent's height, beside its road) before those: it has neither a
+        height nor a side to give way with, and a connector forking off its parent beside
+        it has both (Columbus's ``r2`` beside ``r13``). An outer connector that shares no
+        road with the loop it goes round (:meth:`Movements.goes_round`: it reaches the
+        loop's roads through stubs) comes after that loop if the loop can come first, so
+        that it is fitted round it (Columbus's ``r11`` round ``r6``, which leaves a stub
+        fitted in ``r11``'s round); on a shared road their windows keep them apart
+        (:meth:`AttachmentWindows.road_rail`)."""
         done: set[str] = set()
         out = []
         todo = list(self.topo.ramps)
+        on = {r: {e[0] for e in ends(self.topo, r) if e and e[0] in self.roads} for r in todo}
+        rounds = {r: [k for k in todo if self.moves.goes_round(r, k) and not on[r] & on[k]]
+                  for r in todo}
         while todo:
-            ready = []
+            ready, waiting = [], []
             for r in todo:
                 start, end = ends(self.topo, r)
                 deps = [e[0] for e in (start, end) if e and e[0] not in self.roads]
                 if all(d in done for d in deps):
-                    ready.append(r)
+                    (ready if all(k in done for k in rounds[r]) else waiting).append(r)
+            ready = ready or waiting  # no loop that can come first: as before
             if not ready:
                 raise GeometryError("ramps attach to each other in a cycle",
                                     source=self.topo.source, element=", ".join(todo))
-            for r in sorted(ready, key=lambda r: not self.levels.low_connector(r)):
+            for r in sorted(ready, key=lambda r: (not self.levels.continues_level(r),
+                                                  not self.levels.low_connector(r))):
                 done.add(r)
                 out.append(r)
                 todo.remove(r)

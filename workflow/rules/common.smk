@@ -145,10 +145,19 @@ def class_tables(stage):
 # 22: a ramp's lane centre is nowhere (pointwise) tighter than 95 % of its radius target
 #     (the search: 95.5 %); before, only the radius held over 10 m was (short end legs and
 #     joints turned at down to a tenth of it)
-# 23: a four-level stack's left turns between stub ends: those fitted first stay at their
+# 23: the two branches of a T's terminal (straight on and right at the end; the merge
+#     of the other carriageway likewise) are fenced off each other's side of the
+#     carriageway's right edge until they are a clearance apart in height
+#     (flyover.geometry.terminals): directional_t's rR no longer meets rL there; and a
+#     ramp whose child attaches on the side facing its road keeps a lane off that road's
+#     edge outside its window (flyover.geometry.beside): J1's r2 finds room beside r1/r3
+# 24: an outer connector reaching its loop's roads through stubs (Columbus r11 round r6) is
+#     fitted after the loop and round it; a collector road's level second stub (r13) before
+#     the connector forking beside it (r2); catalog unchanged
+# 25: a four-level stack's left turns between stub ends: those fitted first stay at their
 #     planned level (not lifted) and clear of where the later ones climb from their fixed
 #     ends, if they can (approaches.py); other designs unchanged
-GEOMETRY_VERSION = 23
+GEOMETRY_VERSION = 25
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------

@@ -1,0 +1,60 @@
+"""Room beside a road for a child: a ramp whose child attaches on the side facing its road.
+
+J1's r3 joins R4 on the right and r2 joins r3 on the left: r2 comes in between r3 and R4.
+Fitted on its own, r3 turns early and runs along R4's edge to its merge, so nowhere
+between leaving R2 and that run is there room beside it at its level for r2
+(:meth:`flyover.geometry.rails.AttachmentWindows.room_beside` then found only a few
+metres of r3's start, low beside R2: r2 had to cross R1/R2 and drop into it, and met
+them or missed its radius). Mirrored, r1 leaves R1 on the right and r2 leaves r1 on the
+left. :func:`child_room_fences` keeps such a ramp a child's lane (and 1 m) off its road's
+edge everywhere beyond (before) its window on that road, so that it merges (diverges)
+within its window and not by running along the road first: the child then finds room
+beside it where it is at that road's level. The fence is a band at every height
+(:attr:`flyover.geometry.fit.Obstacles.lines` rows without their height); the build loop
+drops it when the ramp cannot meet its targets within it, as the loop fences of
+:mod:`flyover.geometry.loop_room`. A stub's children fork at its free end, not beside
+it: stubs get none.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+from flyover.geometry.chains import Movements, ends
+from flyover.geometry.fit import RampSpec
+from flyover.geometry.settings import LayoutSettings
+from flyover.topology.model import Label
+
+__all__ = ["child_room_fences"]
+
+
+def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
+                      spec: RampSpec) -> list[tuple[float, ...]]:
+    """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping the
+    ramp of ``spec`` off the strip along its road's right edge, as wide as itself and its
+    widest child attached on its left and 1 m, beyond its start window (leaving the road
+    on the right, children leaving it on the left) or before its end window (joining on
+    the right, children joining it on the left). Empty for any other ramp and for stubs."""
+    ramp, g = spec.id, moves.g
+    if moves.is_stub(ramp):
+        return []
+    out = []
+    for end, rail, leaving in zip(ends(moves.topo, ramp), (spec.start, spec.end), (True, False)):
+        if end is None or end[0] not in moves.roads or rail is None:
+            continue
+        if end[1] is not (Label.OUT_R if leaving else Label.IN_R):
+            continue
+        if leaving:
+            kids = [v for _, v, d in g.out_edges(ramp, data=True) if d["label"] is Label.OUT_L]
+        else:
+            kids = [u for u, _, d in g.in_edges(ramp, data=True) if d["label"] is Label.IN_L]
+        if not kids:
+            continue
+        road = moves.roads[end[0]]
+        edge = road.lanes * st.lane_width_m + 0.5
+        strip = max(width[k] for k in kids) + 1.0  # the fit widens it by the ramp's half width
+        along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
+        out.append((road.origin[0], road.origin[1], math.cos(road.heading),
+                    math.sin(road.heading), *along, -edge - strip, -edge))
+    return out

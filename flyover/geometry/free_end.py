@@ -1,0 +1,171 @@
+"""Free ends: where a stub ramp ends on the side where it has no parent.
+
+Decides the free end of a stub (a ramp with no end, which splits into other ramps, or
+no start, which is formed by merging ramps): its height, how far out it lies and how
+far to the side, how far it may turn, and the room it keeps from the crossing
+(a :class:`flyover.geometry.fit.FreeEnd`). Reads the ramps' kinds
+(:class:`flyover.geometry.chains.Movements`), the level plan
+(:class:`flyover.geometry.levels.LevelPlan`), the ramps fitted so far
+(:class:`flyover.geometry.fitted.FittedRamps`) and the settings. The ramp specs
+(:mod:`flyover.geometry.specs`) ask it for a stub's free end.
+
+* A stub climbs a third of the height between its road and its children's roads, so
+  every ramp of a chain climbs, over a free end far enough out to reach that height
+  at its slope, and keeps the room its children need
+  (:meth:`flyover.geometry.levels.LevelPlan.kids_room`).
+* A stub splitting off a fitted ramp into a loop to a road ahead ends past that road
+  by the loop's room (:meth:`FreeEnds.loop_room`), and a stub splitting off a fitted
+  ramp keeps its free end beside the road its chain comes from (:meth:`FreeEnds.beside_road`;
+  Columbus's collector road ``r13``).
+* The first stub of a collector road (one whose child goes on level) ends along its
+  road (:data:`COLLECTOR_TURN_RAD`); a collector road's second stub goes on at its
+  parent's height under (over) the road its loop goes to.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from flyover.geometry.chains import Movements, ends, road_of
+from flyover.geometry.fit import FreeEnd
+from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.levels import LevelPlan
+from flyover.geometry.profile import climb_distance
+from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
+
+__all__ = ["FreeEnds", "COLLECTOR_TURN_RAD"]
+
+#: how far (rad) the end of a collector road's first stub may turn from its start's heading
+COLLECTOR_TURN_RAD = 0.1
+
+
+class FreeEnds:
+    """The free end of a stub ramp, given the ramps fitted so far (see the module doc)."""
+
+    def __init__(self, moves: Movements, levels: LevelPlan, fitted: FittedRamps,
+                 st: LayoutSettings):
+        self.moves, self.levels, self.fitted, self.st = moves, levels, fitted, st
+        self.topo, self.roads, self.g = moves.topo, moves.roads, moves.g
+
+    def free_end(self, ramp: str, start, end, feat: RampFeatures,
+                 width: float) -> tuple[FreeEnd, float]:
+        """The free end of the stub ``ramp`` (one of ``start``, ``end`` is ``None``) for
+        targets ``feat``, and the room (m) it keeps from the crossing for its children
+        (0 if none)."""
+        st, fitted = self.st, self.fitted
+        fixed = start or end
+        side = fixed[1].side
+        sgn = -1.0 if side == "right" else (1.0 if side == "left" else 0.0)
+        lat = (sorted((sgn * 3.0, sgn * 40.0)) if sgn else (-10.0, 10.0))
+        past = None
+        if end is None:  # split stub: free end
+            z0 = fitted.end_z(start)
+            zf = self.levels.stub_z(ramp, z0, z0 + (self._goal_z(ramp, True) - z0) / 3.0)
+            past = self.loop_room(ramp, start)
+            zq = self.levels.loop_road_z(ramp)
+            if zq is not None and self.levels.continues_level(ramp):
+                # a collector road under (over) it: on at its parent's height there
+                at = fitted.stations[start[0]]
+                zf = float(np.interp(fitted.start_s(ramp, start), at["s"], at["z"]))
+            elif zq is not None:  # its chain passes under (over) that road first
+                clear = st.fit.clearance_m + Z_MARGIN
+                zf = min(zf, zq - clear) if zq > z0 else max(zf, zq + clear)
+        else:
+            z1 = fitted.end_z(end)
+            zf = self.levels.stub_z(ramp, z1, z1 + (self._goal_z(ramp, False) - z1) / 3.0)
+        # the free end is far enough out for the stub to climb to it at its slope
+        z_fix = fitted.end_z(start or end)
+        g = max(feat.slope_pct, 0.5) / 100.0
+        climb = float(climb_distance(zf - z_fix, g, st.fit.transition_m)) + 60.0
+        free = FreeEnd((60.0, max(400.0, climb)), lat, (-np.pi / 4, np.pi / 4), zf)
+        stub_extra = self.levels.kids_room(self.moves.kids(ramp), zf)
+        if stub_extra > 0:  # the free end keeps that room from the crossing
+            free = replace(free, forward=(60.0, max(250.0, climb)))
+            stub_extra += free.forward[1]
+        if past is not None:  # beyond the road its loop goes to, by the loop's room
+            lo = max(free.forward[0], past)
+            free = replace(free, forward=(lo, max(free.forward[1], lo + st.stub_window_m)))
+        if any(self.levels.continues_level(k) for k in self.moves.kids(ramp)):
+            # the first stub of a collector road: it ends along its road
+            free = replace(free, turn=(-COLLECTOR_TURN_RAD, COLLECTOR_TURN_RAD))
+        if start is not None and start[0] not in self.roads:  # a split of a split
+            free = replace(free, lateral=self.beside_road(ramp, start, free, width))
+        return free, stub_extra
+
+    def loop_room(self, ramp: str, start) -> float | None:
+        """How far out (m) a split stub's free end must be when it splits on a fitted ramp
+        and one of its children is a loop to a road ahead of it (Columbus I-70/I-270's
+        collector road ``r13`` leaves the stub ``r8`` beside I-270 before I-70 and splits
+        into the loop ``r6`` to I-70 West beyond it): the loop turns three quarters round
+        on the far side of that road, so the split is the road's distance ahead, its half
+        width and the loop's room beyond it (its radius, or that of a loop as long as its
+        climb at its slope, as :meth:`flyover.geometry.levels.LevelPlan.round_room`; and
+        the stub's and half the loop's width). ``None`` otherwise: the stub's end is then
+        placed as before."""
+        if start[0] in self.roads:
+            return None
+        p, h = self.fitted.start_pose(ramp, start)
+        u = np.array([np.cos(h), np.sin(h)])
+        z0 = self.fitted.end_z(start)
+        out = None
+        for kid in self.moves.kids(ramp):
+            a, b = ends(self.topo, kid)
+            if kid not in self.levels.features or not self.moves.is_loop(kid) or a is None \
+                    or a[0] != ramp or b is None or b[0] not in self.roads:
+                continue
+            q = self.roads[b[0]]
+            d = np.array([np.cos(q.heading), np.sin(q.heading)])
+            across = float(u[0] * d[1] - u[1] * d[0])
+            if abs(across) < 0.5:  # (nearly) along it: not a road it passes
+                continue
+            rel = np.array(q.origin) - p
+            t = float(rel[0] * d[1] - rel[1] * d[0]) / across  # to its centre line
+            if t <= 0:
+                continue
+            r_kid = self.levels.features[kid].radius_m
+            r_kid = r_kid if np.isfinite(r_kid) else self.st.fit.inf_reference_m
+            g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
+            climb = float(climb_distance(abs(q.z - z0), g, self.st.fit.transition_m))
+            r_loop = max(r_kid, climb / (1.5 * np.pi))
+            c = (self.moves.lanes(ramp) + self.moves.lanes(kid) / 2) \
+                * self.st.ramp_lane_width_m + 1.0
+            need = t + q.half_width / abs(across) + r_loop + c
+            out = need if out is None else max(out, need)
+        return out
+
+    def beside_road(self, ramp: str, start, free: FreeEnd, width: float) -> tuple:
+        """The lateral range of the free end of a stub that splits off a fitted ramp, kept
+        beside the road its chain comes from when it runs along it on its right. The range
+        is in the frame of where the stub starts (its parent's end, whose heading is the
+        parent's fit), so ``3..40`` m to the left of a stub leaving its parent on the left
+        can lie across that road (Columbus's ``r13``, leaving ``r8`` toward I-270 North): it
+        slides away from the road, at its width, until the free end is clear of the road's
+        band by half the stub's width and 1 m anywhere in the forward range."""
+        lat = tuple(free.lateral)
+        src = road_of(self.topo, ramp, False)
+        if not src or src not in self.roads:
+            return lat
+        q = self.roads[src]
+        p, h = self.fitted.start_pose(ramp, start)
+        delta = h - q.heading
+        n = np.array([-np.sin(q.heading), np.cos(q.heading)])
+        lat_p = float((p - np.array(q.origin)) @ n)
+        edge = -q.lanes * self.st.lane_width_m - 0.5 * width - 1.0  # right of its band
+        if np.cos(delta) < 0.5 or lat_p > edge:
+            return lat
+        worst = max(d * np.sin(delta) for d in free.forward)
+        e_max = (edge - lat_p - worst) / np.cos(delta)
+        hi = min(lat[1], e_max)
+        return (float(min(lat[0], hi - (lat[1] - lat[0]))), float(hi))
+
+    def _goal_z(self, ramp: str, forward: bool) -> float:
+        """Mean height of the roads the stub's children lead to (come from)."""
+        g = self.g
+        if forward:
+            kids = [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out]
+        else:
+            kids = [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
+        zs = [self.roads[r].z for r in (road_of(self.topo, k, forward) for k in kids) if r]
+        return float(np.mean(zs)) if zs else 0.0
