@@ -1,6 +1,7 @@
 """Layout of whole interchanges: roads, levels, attachments, geometry.json contract."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -789,3 +790,62 @@ def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_th
     # the left crosses the ramps on B and D's level: over them
     assert b.plan[left[0]] == pytest.approx(z_roads + st.level_height_m)
     assert right[0] not in b.plan
+
+
+def test_a_planned_ramp_reserves_its_climb_from_a_fixed_end():
+    """An upper left turn starting on a stub's free end (a point) reserves the straight
+    lead it climbs on: from its lane centre at the stub's end, along the end's heading,
+    rising at its slope target from the end's height to its crest; an end on a road
+    (a window, not a point) and a ramp without a crest reserve nothing."""
+    from flyover.geometry.approaches import approaches  # noqa: PLC0415
+    from flyover.geometry.fit import Rail, RampSpec  # noqa: PLC0415
+    from flyover.geometry.profile import climb_distance  # noqa: PLC0415
+
+    s = np.linspace(0.0, 300.0, 301)
+    stub = Rail("eB2", "Out-L", s, np.stack([-s, np.full_like(s, 20.0)], -1),
+                np.full_like(s, np.pi), np.full_like(s, 12.0), 0.0, 300.0, 300.0)
+    road = Rail.line("A2", "In-R", (0.0, 0.0), -np.pi / 2, 0.0, -15.0, -900.0, -700.0)
+    spec = RampSpec("lB2", stub, road, None, 1.5, 3, 4.0, 100.0, 2.0, z_crest=19.5)
+    (a,) = approaches(spec, 40.0)
+    assert a.ramp == "lB2" and a.half_width_m == 2.0
+    # starts at the lane centre (2 m right of the reference line, heading -x: +y)
+    assert np.allclose(a.xy[0], (-300.0, 22.0))
+    assert np.allclose(a.xy[:, 1], 22.0) and np.all(np.diff(a.xy[:, 0]) < 0)  # along -x
+    length = float(climb_distance(7.5, 0.02, 40.0))
+    assert abs(np.hypot(*(a.xy[-1] - a.xy[0])) - length) < 1e-6
+    assert np.max(np.hypot(*np.diff(a.xy, axis=0).T)) <= 2.0  # as dense as fitted ramps
+    assert a.z[0] == pytest.approx(12.0) and a.z[-1] == pytest.approx(19.5)
+    grade = np.diff(a.z) / np.hypot(*np.diff(a.xy, axis=0).T)
+    assert grade.min() >= -1e-9 and grade.max() <= 0.02 + 1e-9
+    # joining the stub's start instead: the approach runs back from it, against its heading
+    back = replace(spec, start=road, end=replace(stub, lo=0.0, hi=0.0))
+    (b,) = approaches(back, 40.0)
+    assert np.allclose(b.xy[0], (0.0, 22.0)) and np.all(np.diff(b.xy[:, 0]) > 0)
+    assert approaches(replace(spec, z_crest=None), 40.0) == []
+    assert approaches(replace(spec, start=road), 40.0) == []  # both ends on roads
+
+
+@pytest.mark.slow
+def test_an_upper_left_turn_of_a_stack_clears_the_lower_one_at_its_first_try():
+    """stack4 feature set 7 of the workflow (t=2 array, config seed): the lower left turn
+    lA2 landed on mB1's free end after crossing B right beside eB2's free end, where the
+    upper left turn lB2 starts at the same height; no shape of lB2 between its fixed ends
+    cleared lA2 (a same-level conflict at its first try). Fitted clear of lB2's climb from
+    eB2 (:mod:`flyover.geometry.approaches`), lA2 crosses where lB2 is a level above it,
+    and every ramp meets its targets at the first try."""
+    from flyover.config import load_config  # noqa: PLC0415
+
+    t = catalog_topologies()["stack4"]
+    lanes = {"A1": 5, "A2": 5, "B1": 4, "B2": 4}
+    targets = {"eA1": (30, 3), "eA2": (30, 1), "eB1": (30, 3), "eB2": (30, 4),
+               "lA1": (30, 4), "lA2": (100, 4), "lB1": (30, 1), "lB2": (30, 2),
+               "mA1": (math.inf, 3), "mA2": (210, 4), "mB1": (150, 2), "mB2": (150, 2),
+               "rA1": (100, 1), "rA2": (40, 4), "rB1": (150, 2), "rB2": (150, 5)}
+    feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
+    st = LayoutSettings.from_config(load_config()["geometry"])
+    ic = build_interchange(t, lanes, feats, class_id="c0", sample=7, seed=402799872,
+                           settings=replace(st, rebuilds=0, max_resamples=0))
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["lA2"].fit.z_crest == 13.0 and out["lB2"].fit.z_crest == 19.5
+    assert [r for r, o in out.items() if not o.first_try_ok] == []
+    assert not same_level_conflicts(ic.geometry)

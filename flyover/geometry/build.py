@@ -19,6 +19,11 @@ and the ramps already fitted:
    (:func:`flyover.geometry.terminals.terminal_fences`), and a ramp whose child
    attaches on the side facing its road, inside the fence that keeps it a lane off that
    road's edge outside its window (:func:`flyover.geometry.beside.child_room_fences`);
+   a direct left turn fitted before other direct left turns whose ends are
+   already fixed (a four-level stack's lower level, on stubs) is first fitted at
+   its planned level, not lifted, and clear of where those climb from their fixed
+   ends (:mod:`flyover.geometry.approaches`; if it cannot meet its targets so, as
+   any other ramp);
 1. a ramp that still conflicts is lifted to the next level (a flyover);
 2. one that misses its targets is fitted again with straight leads (a ramp
    that climbs may first run along its parent's heading, as long as the climb
@@ -96,7 +101,8 @@ def _collector(b: LayoutState, ramp: str, spec: RampSpec) -> RampFit | None:
 
 def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
                      keep_out: frozenset[str] = frozenset(),
-                     fences: tuple = ()) -> tuple[RampFit, int, float]:
+                     fences: tuple = (), approaches: tuple = (),
+                     lift: bool = True) -> tuple[RampFit, int, float]:
     """Fit; while the ramp meets something at its level, lift its crest one level.
 
     The first fits have no leads; a ramp that still misses its targets is fitted
@@ -104,11 +110,13 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
     (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
     cubic cannot bend evenly enough for its radius), then with one more piece
     but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
-    in plan at all, ``fences``: bands it must not enter at any height
-    (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`)."""
+    in plan at all, ``fences``: bands it must not enter at any height, ``approaches``:
+    where ramps fitted later climb from their fixed ends
+    (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`); ``lift`` False: at its
+    planned crest throughout."""
     st = b.st
     evals, secs = 0, 0.0
-    obst = b.obstacles(keep_out, fences)
+    obst = b.obstacles(keep_out, fences, approaches)
     tried = []
     more = replace(spec, pieces=spec.pieces + 1)
     plain_more = replace(more, lead_m=(None, None))
@@ -123,7 +131,7 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
             break
         # a level ramp (slope target 0) is never lifted: it would climb a wall
         higher = [z for z in st.levels_m if z > fit.z_crest + 1e-6
-                  and spec.target_slope_pct > 0]
+                  and spec.target_slope_pct > 0 and lift]
         if not higher or (len(tried) > 1 and fit.conflicts >= tried[-2].conflicts):
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
@@ -247,6 +255,15 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             evals, secs = evals + e2, secs + s2
             if fenced.ok and fenced.conflicts == 0:
                 fit = recount(fenced, b.obstacles(), st.fit)
+        if fit is None and (ahead := b.approaches(ramp)):
+            # a direct left turn keeps off where those fitted after it climb from their
+            # fixed ends (:mod:`flyover.geometry.approaches`), at its planned level (lifted,
+            # it would be on theirs); if it cannot meet its targets so, it is fitted as any
+            # other ramp
+            kept, e2, s2 = _fit_with_levels(b, spec, rseed, approaches=ahead, lift=False)
+            evals, secs = evals + e2, secs + s2
+            if kept.ok and kept.conflicts == 0:
+                fit = recount(kept, b.obstacles(), st.fit)
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2

@@ -53,10 +53,13 @@ class FittedRamps:
         self.bands = road_bands(self.roads, st)
 
     def obstacles(self, keep_out: frozenset[str] = frozenset(),
-                  fences: tuple = ()) -> Obstacles:
+                  fences: tuple = (), approaches: tuple = ()) -> Obstacles:
         """Roads and fitted ramps; the fitted ramps in ``keep_out`` at every height (a
         ramp must not cross them in plan at all), and so the ``fences`` (road-frame bands
-        ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``, named ``fence``)."""
+        ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``, named ``fence``); the
+        ``approaches`` of ramps not fitted yet
+        (:class:`flyover.geometry.approaches.Approach`) at their heights, named after
+        their ramp."""
         st = self.st
         lines = self.bands
         names = [r.id for r in self.roads.values()]
@@ -71,6 +74,11 @@ class FittedRamps:
             zs.append(s["centre_z"])
             hw.append(np.full(len(s["centre_z"]), self.width[rid] / 2))
             owner += [rid] * len(s["centre_z"])
+        for a in approaches:
+            pts.append(a.xy)
+            zs.append(a.z)
+            hw.append(np.full(len(a.z), a.half_width_m))
+            owner += [a.ramp] * len(a.z)
         # a keep-out loop, copied at heights less than the clearance apart over every level:
         # no height of the ramp clears it
         for rid in sorted(keep_out & set(self.stations)):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
+from flyover.geometry.approaches import Approach, approaches
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Obstacles, RampFit, RampSpec
 from flyover.geometry.fitted import FittedRamps
@@ -61,8 +62,29 @@ class LayoutState:
     def spec(self, ramp: str, feat: RampFeatures, level: bool = True) -> RampSpec:
         return self.specs.spec(ramp, feat, level)
 
-    def obstacles(self, keep_out: frozenset[str] = frozenset(), fences: tuple = ()) -> Obstacles:
-        return self.fitted.obstacles(keep_out, fences)
+    def obstacles(self, keep_out: frozenset[str] = frozenset(), fences: tuple = (),
+                  approaches: tuple = ()) -> Obstacles:
+        return self.fitted.obstacles(keep_out, fences, approaches)
+
+    def approaches(self, ramp: str) -> tuple[Approach, ...]:
+        """The approaches (:func:`flyover.geometry.approaches.approaches`) of the planned
+        ramps other than ``ramp`` not fitted yet that start and end on fitted ramps (a
+        four-level stack's left turns, between two stubs' free ends), when ``ramp`` is a
+        planned ramp itself (a direct left turn fitted before them). A left turn with an
+        end on a road (a turbine's, a cloverstack's) still chooses where it attaches
+        there: none."""
+        if ramp not in self.plan:
+            return ()
+        out = []
+        for other in self.topo.ramps:
+            if other == ramp or other not in self.plan or other in self.fits \
+                    or other not in self.features:
+                continue
+            if not all(e is not None and e[0] not in self.roads and e[0] in self.fits
+                       for e in ends(self.topo, other)):
+                continue
+            out += approaches(self.spec(other, self.features[other]), self.st.fit.transition_m)
+        return tuple(out)
 
     def record(self, ramp: str, fit: RampFit) -> None:
         self.fitted.record(ramp, fit)

@@ -158,7 +158,10 @@ def class_tables(stage):
 #     are one line: the one without ramps to a third road runs on past the centre, in the
 #     other's median, to 40 m short of its terminal; the ramps between them are short and
 #     level (catalog unchanged: no design has such a pair)
-GEOMETRY_VERSION = 25
+# 26: a four-level stack's left turns between stub ends: those fitted first stay at their
+#     planned level (not lifted) and clear of where the later ones climb from their fixed
+#     ends, if they can (approaches.py); other designs unchanged
+GEOMETRY_VERSION = 26
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
