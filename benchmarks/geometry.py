@@ -203,8 +203,8 @@ def print_real_comparison(rows, names, real_by_ramp) -> None:
 
 def round_pairs(topo, settings) -> list[tuple[str, str]]:
     """(outer connector, loop) pairs: a cloverleaf's or parclo's outer connector and the
-    loop joining the same two roads the other way round, on the road they share
-    (:func:`flyover.geometry.feasibility.round_loops`)."""
+    loop joining the same two roads the other way round, on the road they share or
+    through stubs (:func:`flyover.geometry.feasibility.round_loops`)."""
     from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
 
     return [(p.connector, p.loop) for p in round_loops(topo, settings)]
