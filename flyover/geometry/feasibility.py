@@ -57,21 +57,21 @@ ramp longer than any real one: it is forbidden on that ramp too.
 >>> sorted(turning_ramps(catalog_topologies()["turbine"]))[:3]
 ['lA1', 'lA2', 'lB1']
 
-**Outer connectors round their loops.** A cloverleaf's or parclo's outer connector
-and the loop that joins the same two roads the other way round, on the road they
-share or with their chains through stubs (Columbus's ``r11`` round ``r6``:
+**Outer connectors round their loops.** A cloverleaf's or parclo's outer connector and
+the loop that joins the same two roads the other way round, on the road they share or
+with their chains through stubs (Columbus's ``r11`` round ``r6``:
 :meth:`flyover.geometry.chains.Movements.is_outer_connector`, the rule the layout
 keeps them apart by), lie in one quadrant, the connector outside: real ones are two
-nearly concentric curves, the connector's the wider. A connector sampled tighter than its loop can go round it only
-by an S-bend or a corner that no real one has, and the fit often takes it over or
-under the loop instead (a bridge the design does not have). So the connector's radius
-must exceed its loop's by the room between their centre lines
-(:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as the
-layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
-(connector radius, loop radius) that does not is forbidden (:func:`round_loops`; ``inf``
-counts as ``inf_reference_m``, the radius it is built with). The pairs are read from
-the topology and the road layout, not from a design's name, so an OSM cloverleaf gets
-them too.
+nearly concentric curves, the connector's the wider. A connector sampled tighter than
+its loop can go round it only by an S-bend or a corner that no real one has, and the
+fit often takes it over or under the loop instead (a bridge the design does not have).
+So the connector's radius must exceed its loop's by the room between their centre
+lines (:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as
+the layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
+(connector radius, loop radius) that does not is forbidden (:func:`round_loops`;
+``inf`` counts as ``inf_reference_m``, the radius it is built with). The pairs are
+read from the topology and the road layout, not from a design's name, so an OSM
+cloverleaf gets them too.
 
 >>> [(p.connector, p.loop) for p in round_loops(catalog_topologies()["cloverstack"])]
 [('oA1', 'lB1'), ('oA2', 'lB2')]
