@@ -203,8 +203,8 @@ def print_real_comparison(rows, names, real_by_ramp) -> None:
 
 def round_pairs(topo, settings) -> list[tuple[str, str]]:
     """(outer connector, loop) pairs: a cloverleaf's or parclo's outer connector and the
-    loop joining the same two roads the other way round, on the road they share
-    (:func:`flyover.geometry.feasibility.round_loops`)."""
+    loop joining the same two roads the other way round, on the road they share or
+    through stubs (:func:`flyover.geometry.feasibility.round_loops`)."""
     from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
 
     return [(p.connector, p.loop) for p in round_loops(topo, settings)]
@@ -549,6 +549,7 @@ def main() -> None:
     xodr_jumps: dict[str, list[float]] = {}
     rounded: dict[str, list[bool]] = {}
     round_misses: list[tuple] = []
+    round_named: dict[str, set[tuple[str, str]]] = {}  # the (connector, loop) pairs counted
     failed = []
     for name, sample, secs, *built in done:
         if len(built) == 1:
@@ -558,6 +559,7 @@ def main() -> None:
         ic_rows, ic_fits, dense, again, bridges, box, jump, rnd = built
         rounded.setdefault(name, []).extend(r[0] for r in rnd)
         round_misses += [(name, sample, *r[1:]) for r in rnd if not r[0]]
+        round_named.setdefault(name, set()).update((r[1], r[2]) for r in rnd)
         jumps.setdefault(name, []).extend(jump[0])
         xodr_jumps.setdefault(name, []).extend(jump[1])
         boxes.setdefault(name, []).append(box[0] * box[1] / 1e6)
@@ -680,7 +682,8 @@ def main() -> None:
           "flyover.geometry.check.ramp_crossings):")
     for name, rs in sorted(rounded.items()):
         if rs:
-            print(f"  {name:<17} {100 * sum(rs) / len(rs):5.1f} %  (n={len(rs)})")
+            pairs = " ".join(f"{a}/{b}" for a, b in sorted(round_named[name]))
+            print(f"  {name:<17} {100 * sum(rs) / len(rs):5.1f} %  (n={len(rs)}; {pairs})")
     for name, sample, ramp, loop, r_ramp, r_loop in round_misses[:args.show_rounds]:
         print(f"    over/under {name} {sample} {ramp} (radius target {r_ramp:g}) and its loop "
               f"{loop} ({r_loop:g})")

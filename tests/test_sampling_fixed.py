@@ -26,6 +26,7 @@ from flyover.sampling.model import ElementCondition, Feature, ForbidRule, defaul
 from flyover.sampling.sample import FEATURES_SCHEMA, sample_topology
 from flyover.topology.catalog import catalog_topologies
 from flyover.topology.model import Connection, Kind, Label, Ramp, Road, Topology
+from tests.test_geometry_osm_topologies import COLUMBUS, _collector_round
 from tests.test_sampling import cells, independent_coverage
 
 CD_ROADS = {"cA1", "cA2", "cB1", "cB2"}
@@ -301,3 +302,35 @@ def test_the_sampled_array_keeps_every_connector_wider_and_covers_the_rest():
     covered, total = independent_coverage(s.array.rows, s.model.levels, 2,
                                           cells(s.model.forbidden), cons.extendable)
     assert covered == total == s.coverage.tuples_total
+
+
+def test_a_connector_reaching_its_loops_roads_through_stubs_must_be_wider_than_it():
+    """o joins B2 and A1, the roads the loop k joins, the other way round, each through a
+    stub (o leaves B2 through s, k leaves A1 through e and c), and shares no road with k.
+    The layout fits o round k (chains.Movements.is_outer_connector); sampling must keep
+    o wider than k by the same rule, else o is drawn tighter than the loop it goes round."""
+    topo = _collector_round()
+    assert ("o", "k") in [(p.connector, p.loop) for p in round_loops(topo)]
+    profile = default_profile()
+    model = feature_model(topo, profile, forbidden_features(topo, profile))
+    allowed = _pair_allowed(model, "o", "k")
+    assert allowed[(60.0, 40.0)] and not allowed[(40.0, 40.0)] and not allowed[(40.0, 60.0)]
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_connector_round_its_loop_through_stubs_is_sampled_wider():
+    """Columbus: r11 (I-70 West through the stub r1 to I-270 North) goes round the loop r6
+    (I-270 North through r8 and r13 to I-70 West); the layout fits it round r6, so every
+    sampled row has r11 wider than r6 by the room between them (one lane each: 7 m)."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    pair = next(p for p in round_loops(topo) if (p.connector, p.loop) == ("r11", "r6"))
+    assert pair.margin_m == 7.0
+    profile = default_profile()
+    s = sample_topology(topo, profile, t=2, seed=11, fixed=fixed_features(topo),
+                        extra=forbidden_features(topo, profile))
+    radius = {(r["sample"], r["element"]): r["radius_m"] for r in s.feature_rows()}
+    held = {(radius[k, "r11"], radius[k, "r6"]) for k in range(s.coverage.rows)}
+    assert all(pair.allows(a, b) for a, b in held)
+    assert any(b >= 40.0 for _, b in held)  # the loop still takes wide radii

@@ -230,6 +230,18 @@ class Movements:
         return a is not None and b is not None and a != b \
             and (b, a) == (self.through_stubs(loop, False), self.through_stubs(loop, True))
 
+    def is_outer_connector(self, ramp: str, loop: str) -> bool:
+        """Whether ``ramp`` goes round the loop ``loop`` as its outer connector: on a road
+        both attach to (:meth:`goes_round_loop`) or by their chains through stubs
+        (:meth:`goes_round`; Columbus's ``r11`` round ``r6``). The one rule the layout
+        (:meth:`flyover.geometry.loop_room.LoopRoom.round_loops`) and sampling
+        (:func:`flyover.geometry.feasibility.round_loops`) share."""
+        if self.goes_round(ramp, loop):
+            return True
+        on = [{e[0] for e in ends(self.topo, r) if e is not None and e[0] in self.roads}
+              for r in (ramp, loop)]
+        return any(self.goes_round_loop(ramp, loop, road) for road in sorted(on[0] & on[1]))
+
     def crosses_loop_exit(self, ramp: str, other: str, road: str) -> bool:
         """Whether ``ramp``, joining ``road`` after the loop ``other`` leaves it, has to pass
         over the loop's exit branch: it does unless it comes from the road the loop goes

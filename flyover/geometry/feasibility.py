@@ -57,20 +57,21 @@ ramp longer than any real one: it is forbidden on that ramp too.
 >>> sorted(turning_ramps(catalog_topologies()["turbine"]))[:3]
 ['lA1', 'lA2', 'lB1']
 
-**Outer connectors round their loops.** A cloverleaf's or parclo's outer connector
-and the loop that joins the same two roads the other way round, on the road they
-share (:meth:`flyover.geometry.chains.Movements.goes_round_loop`), lie in one
-quadrant, the connector outside: real ones are two nearly concentric curves, the
-connector's the wider. A connector sampled tighter than its loop can go round it only
-by an S-bend or a corner that no real one has, and the fit often takes it over or
-under the loop instead (a bridge the design does not have). So the connector's radius
-must exceed its loop's by the room between their centre lines
-(:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as the
-layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
-(connector radius, loop radius) that does not is forbidden (:func:`round_loops`; ``inf``
-counts as ``inf_reference_m``, the radius it is built with). The pairs are read from
-the topology and the road layout, not from a design's name, so an OSM cloverleaf gets
-them too.
+**Outer connectors round their loops.** A cloverleaf's or parclo's outer connector and
+the loop that joins the same two roads the other way round, on the road they share or
+with their chains through stubs (Columbus's ``r11`` round ``r6``:
+:meth:`flyover.geometry.chains.Movements.is_outer_connector`, the rule the layout
+keeps them apart by), lie in one quadrant, the connector outside: real ones are two
+nearly concentric curves, the connector's the wider. A connector sampled tighter than
+its loop can go round it only by an S-bend or a corner that no real one has, and the
+fit often takes it over or under the loop instead (a bridge the design does not have).
+So the connector's radius must exceed its loop's by the room between their centre
+lines (:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as
+the layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
+(connector radius, loop radius) that does not is forbidden (:func:`round_loops`;
+``inf`` counts as ``inf_reference_m``, the radius it is built with). The pairs are
+read from the topology and the road layout, not from a design's name, so an OSM
+cloverleaf gets them too.
 
 >>> [(p.connector, p.loop) for p in round_loops(catalog_topologies()["cloverstack"])]
 [('oA1', 'lB1'), ('oA2', 'lB2')]
@@ -203,19 +204,16 @@ class RoundLoop:
 def round_loops(topology: Topology, settings: LayoutSettings | None = None
                 ) -> tuple[RoundLoop, ...]:
     """Every outer connector of ``topology`` and the loop it goes round: the loop joining
-    the same two roads the other way round, on a road they share
-    (:meth:`flyover.geometry.chains.Movements.goes_round_loop`, on the road layout of
+    the same two roads the other way round, on a road they share or through stubs
+    (:meth:`flyover.geometry.chains.Movements.is_outer_connector`, on the road layout of
     :mod:`flyover.geometry.roads`, which does not depend on the sample); in ramp id order."""
     st = settings or LayoutSettings()
     roads = layout_roads(topology, {}, st)
     moves = Movements(topology, roads)
-    on = {r: {e[0] for e in _ends(topology, r) if e is not None and e[0] in roads}
-          for r in topology.ramps}
     out = []
     for ramp in topology.ramps:
         for loop in topology.ramps:
-            if loop != ramp and any(moves.goes_round_loop(ramp, loop, road)
-                                    for road in sorted(on[ramp] & on[loop])):
+            if moves.is_outer_connector(ramp, loop):
                 margin = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
                 out.append(RoundLoop(ramp, loop, margin, st.fit.inf_reference_m))
     return tuple(out)

@@ -81,16 +81,8 @@ class LoopRoom:
     def round_loops(self, ramp: str) -> frozenset[str]:
         """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
         joining the same two roads the other way round, on the road they share, or with
-        its chain through stubs: :meth:`flyover.geometry.chains.Movements.goes_round`)."""
-        out = {other for other in self.fitted.fits if self.moves.goes_round(ramp, other)}
-        for end in ends(self.topo, ramp):
-            if end is None or end[0] not in self.roads:
-                continue
-            for other in self.fitted.fits:
-                if any(e is not None and e[0] == end[0] for e in ends(self.topo, other)) \
-                        and self.moves.goes_round_loop(ramp, other, end[0]):
-                    out.add(other)
-        return frozenset(out)
+        its chain through stubs: :meth:`flyover.geometry.chains.Movements.is_outer_connector`)."""
+        return frozenset(o for o in self.fitted.fits if self.moves.is_outer_connector(ramp, o))
 
     def round_loop(self, loop: str, road: str, width: float, side: int,
                    feat: RampFeatures) -> float:
