@@ -32,7 +32,12 @@ attachments) and the ramp's targets.
   that grade counts toward its slope.
 * A ramp straight on from one expressway to the next that continues it
   (:func:`flyover.geometry.chains.continuations`) attaches within ``gap_m / 2`` beyond
-  ``gap_m`` from where its road ends (begins), as short as real ones are.
+  ``gap_m`` from where its road ends (begins), as short as real ones are; the other
+  ramps on that road keep ``gap_m`` beyond that window, fitted first or not
+  (:func:`beyond_continuation`).
+* Whatever the fall-backs above give, a window on a road keeps ``gap_m`` from where the
+  ramps fitted so far attach to it, on either side (:func:`clear_of_others`): the writer's
+  junctions take up to a third of the distance between two attachments.
 * A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
   crossing; any other ramp within what it needs (``bound``, from
   :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
