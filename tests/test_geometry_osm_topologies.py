@@ -237,3 +237,41 @@ def test_expressways_that_continue_one_another_are_laid_out_as_one_line():
     assert all(f.ok for f in fits.values()), {k: f.ok for k, f in fits.items()}
     assert fits["u"].length_m < 150.0 and fits["v"].length_m < 150.0
     assert not same_level_conflicts(ic.geometry)
+
+
+def test_a_ramp_fitted_before_a_continuation_leaves_it_room_for_the_writers_junctions():
+    """DC (file 26), drawn feature set 0: r14 joins I-66 North on its right, r3 (from the
+    Potomac Freeway, straight on) on its left by its start. r14 was fitted first, with
+    nothing on I-66 North yet, and ended 40.13 m from its start, in the window r3 is held
+    to (40-60 m: by the road's start); r3's window, with no room left before r14, fell
+    back to 40-240 m and r3 ended 0.45 m from r14, too close for the writer's junctions
+    (``leaves no room for a junction (0.15 m)``: not exported). Here k plays r14 on B1,
+    u plays r3: k's window keeps ``gap_m`` beyond u's, and u's window, were k already
+    where r14 was, keeps ``gap_m`` from it."""
+    c = Connection
+    base = _continued_t()
+    t = Topology.build(
+        "continued_t_k", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2")],
+        [Ramp(x) for x in "kpquv"],
+        [c("A1", "p", Label.OUT_L, 0.3), c("p", "B1", Label.IN_M),
+         c("B2", "q", Label.OUT_M), c("q", "A2", Label.IN_R, 0.7),
+         c("C1", "u", Label.OUT_M), c("u", "B1", Label.IN_L, 0.5),
+         c("B2", "v", Label.OUT_L, 0.3), c("v", "C2", Label.IN_M),
+         c("A2", "k", Label.OUT_R, 0.2), c("k", "B1", Label.IN_R, 0.8)])
+    assert set(base.ramps) < set(t.ramps)
+    st = LayoutSettings()
+    feats = {r: RampFeatures(200.0, 4.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, st, 0)
+    order = b.order()
+    assert order.index("k") < order.index("u")  # as r14 before r3
+    b1 = b.roads["B1"]
+    u = b.windows.rail("u", feats["u"], ("B1", Label.IN_L), False, False, st.ramp_lane_width_m)
+    k = b.windows.rail("k", feats["k"], ("B1", Label.IN_R), False, False, st.ramp_lane_width_m)
+    assert u.hi - b1.t_lo <= 1.5 * st.gap_m  # u still by B1's start
+    assert k.lo >= u.hi + st.gap_m - 1e-9
+    # k where r14 was: u keeps the room from it
+    t_k = b1.t_lo + 40.13
+    b.fitted.attached.setdefault("B1", []).append((0.8, t_k, t_k, "k", t_k))
+    u = b.windows.rail("u", feats["u"], ("B1", Label.IN_L), False, False, st.ramp_lane_width_m)
+    assert u.lo >= t_k + st.gap_m - 1e-9 or u.hi <= t_k - st.gap_m + 1e-9, (u.lo, u.hi, t_k)
+    assert u.lo >= b1.t_lo + st.gap_m - 1e-9

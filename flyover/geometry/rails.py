@@ -32,7 +32,12 @@ attachments) and the ramp's targets.
   that grade counts toward its slope.
 * A ramp straight on from one expressway to the next that continues it
   (:func:`flyover.geometry.chains.continuations`) attaches within ``gap_m / 2`` beyond
-  ``gap_m`` from where its road ends (begins), as short as real ones are.
+  ``gap_m`` from where its road ends (begins), as short as real ones are; the other
+  ramps on that road keep ``gap_m`` beyond that window, fitted first or not
+  (:func:`beyond_continuation`).
+* Whatever the fall-backs above give, a window on a road keeps ``gap_m`` from where the
+  ramps fitted so far attach to it, on either side (:func:`clear_of_others`): the writer's
+  junctions take up to a third of the distance between two attachments.
 * A stub attaches within ``stub_window_m`` beyond the room it leaves toward the
   crossing; any other ramp within what it needs (``bound``, from
   :meth:`flyover.geometry.specs.RampSpecs.need_m` and ``length_margin``), so
@@ -52,7 +57,8 @@ from flyover.geometry.loop_room import LoopRoom
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
-__all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M"]
+__all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M", "beyond_continuation",
+           "clear_of_others"]
 
 #: the largest grade of a parent ramp (a fraction) at which a child may attach to it
 LEVEL_GRADE = 0.003
@@ -125,6 +131,8 @@ class AttachmentWindows:
             if ramp in moves.continuing:  # straight on to the next expressway: by its end
                 lo, hi = (r.t_hi - 1.5 * st.gap_m, r.t_hi - st.gap_m) if is_start else \
                     (r.t_lo + st.gap_m, r.t_lo + 1.5 * st.gap_m)
+            else:  # clear of where a ramp straight on attaches by this road's end
+                lo, hi = beyond_continuation(moves, st, road, ramp, lo, hi)
             if pos is not None:
                 for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
                     round_loop = moves.goes_round_loop(ramp, other, road)
@@ -147,6 +155,7 @@ class AttachmentWindows:
             # never beyond the carriageway's ends (a half line's, a T's terminal)
             lo = float(np.clip(lo, r.t_lo + st.gap_m, r.t_hi - st.gap_m))
             hi = float(np.clip(hi, r.t_lo + st.gap_m, r.t_hi - st.gap_m))
+            lo, hi = clear_of_others(self.fitted, st, road, ramp, lo, hi, before)
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
@@ -274,3 +283,74 @@ class AttachmentWindows:
             return lo, hi
         a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
         return float(a), float(b)
+
+
+def beyond_continuation(moves: Movements, st: LayoutSettings, road: str, ramp: str,
+                        lo: float, hi: float) -> tuple[float, float]:
+    """``lo..hi`` on ``road`` kept ``gap_m`` beyond the window of a ramp straight on to
+    (from) the next expressway that attaches by the road's start (end) beside it,
+    fitted or not: that window is fixed by the road's end
+    (:meth:`AttachmentWindows.road_rail`), so a ramp fitted before it there would leave it
+    no room (DC's r14 on I-66 North, fitted before r3, at 40.13 m of it: r3 ended 0.45 m
+    from it, too close for the writer's junctions)."""
+    r, gap = moves.roads[road], st.gap_m
+    for c in sorted(moves.continuing - {ramp}):
+        start, end = ends(moves.topo, c)
+        if end is not None and end[0] == road and end[1] is not Label.IN_M \
+                and np.isfinite(r.t_lo):
+            lo = max(lo, r.t_lo + 2.5 * gap)
+        if start is not None and start[0] == road and start[1] is not Label.OUT_M \
+                and np.isfinite(r.t_hi):
+            hi = min(hi, r.t_hi - 2.5 * gap)
+    return lo, hi
+
+
+def clear_of_others(fitted: FittedRamps, st: LayoutSettings, road: str, ramp: str,
+                    lo: float, hi: float, before: bool) -> tuple[float, float]:
+    """``lo..hi`` on ``road`` without the stretches within ``gap_m`` of where the ramps
+    fitted so far attach to it, whatever their side or order: the writer cuts a
+    junction of up to a third of the distance to the next attachment on either side
+    (:func:`flyover.opendrive.writer._plan_pieces`; under 0.5 m it cannot export), and
+    the fall-backs above (no room between the others, a continuation's fixed window)
+    may otherwise end on one. Unchanged when it holds no such stretch; else the
+    longest free part; else (none is 1 m long) the nearest free stretch beyond the
+    window, ``stub_window_m`` long at most, toward the side's order on a tie."""
+    r, gap = fitted.roads[road], st.gap_m
+    zones = sorted((t - gap, t + gap) for _, _, _, other, t in
+                   fitted.attached.get(road, []) if other != ramp)
+
+    def free(a: float, b: float) -> list[tuple[float, float]]:
+        out, s = [], a
+        for z0, z1 in zones:
+            if z1 <= s:
+                continue
+            if z0 >= b:
+                break
+            if z0 > s:
+                out.append((s, z0))
+            s = max(s, z1)
+        if s < b:
+            out.append((s, b))
+        return out
+
+    parts = free(lo, hi)
+    if parts == [(lo, hi)]:
+        return lo, hi
+    parts = [p for p in parts if p[1] - p[0] >= 1.0]
+    if parts:
+        return max(parts, key=lambda p: p[1] - p[0])
+    a_min = max(r.t_lo + gap, -1e5)
+    a_max = min(r.t_hi - gap, 1e5)
+    best = None
+    for a, b in free(a_min, a_max):
+        if b - a < 1.0:
+            continue
+        if b <= lo:
+            cand, d = (max(a, b - st.stub_window_m), b), lo - b
+        else:
+            a = max(a, lo)
+            cand, d = (a, min(b, a + st.stub_window_m)), a - hi
+        key = (round(max(d, 0.0), 6), (cand[0] >= hi) == before)
+        if best is None or key < best[0]:
+            best = (key, cand)
+    return best[1] if best else (lo, hi)

@@ -161,7 +161,11 @@ def class_tables(stage):
 # 26: a four-level stack's left turns between stub ends: those fitted first stay at their
 #     planned level (not lifted) and clear of where the later ones climb from their fixed
 #     ends, if they can (approaches.py); other designs unchanged
-GEOMETRY_VERSION = 26
+# 27: a road's attachment windows keep gap_m from where ramps fitted before attach to it
+#     (any side or order), and ramps other than a continuation keep gap_m beyond its fixed
+#     window by the road's end (DC 26 drawn set 0: r3 ended 0.45 m from r14 on I-66 North,
+#     not exportable); catalog unchanged
+GEOMETRY_VERSION = 27
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
