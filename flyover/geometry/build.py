@@ -210,6 +210,17 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
     return Interchange(ic.geometry, outs)
 
 
+def _kept_within(b: LayoutState, spec: RampSpec, seed: int, **within
+                 ) -> tuple[RampFit | None, int, float]:
+    """A fit of ``spec`` kept out of more than what is built (``within``: the fences or
+    approaches of :func:`_fit_with_levels`), counted again against what is built; ``None``
+    (with the search's cost) if it misses its targets or meets something so."""
+    kept, evals, secs = _fit_with_levels(b, spec, seed, **within)
+    if kept.ok and kept.conflicts == 0:
+        return recount(kept, b.obstacles(), b.st.fit), evals, secs
+    return None, evals, secs
+
+
 def _build_once(topology: Topology, lanes: Mapping[str, int],
                 features: Mapping[str, RampFeatures], class_id: str, sample: int, seed: int,
                 st: LayoutSettings, resampler) -> Interchange:
@@ -251,19 +262,15 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
             # attaches on its road's side off that road's edge (:func:`child_room_fences`);
             # if it cannot meet its targets so, it is fitted as any other ramp
-            fenced, e2, s2 = _fit_with_levels(b, spec, rseed, fences=fences)
+            fit, e2, s2 = _kept_within(b, spec, rseed, fences=fences)
             evals, secs = evals + e2, secs + s2
-            if fenced.ok and fenced.conflicts == 0:
-                fit = recount(fenced, b.obstacles(), st.fit)
         if fit is None and (ahead := b.approaches(ramp)):
             # a direct left turn keeps off where those fitted after it climb from their
             # fixed ends (:mod:`flyover.geometry.approaches`), at its planned level (lifted,
             # it would be on theirs); if it cannot meet its targets so, it is fitted as any
             # other ramp
-            kept, e2, s2 = _fit_with_levels(b, spec, rseed, approaches=ahead, lift=False)
+            fit, e2, s2 = _kept_within(b, spec, rseed, approaches=ahead, lift=False)
             evals, secs = evals + e2, secs + s2
-            if kept.ok and kept.conflicts == 0:
-                fit = recount(kept, b.obstacles(), st.fit)
         if fit is None:
             fit, e2, s2 = _fit_with_levels(b, spec, rseed)
             evals, secs = evals + e2, secs + s2
