@@ -66,15 +66,15 @@ class _FirstTries:
         tries = self
 
         class Resampler:
-            def __call__(self, ramp, attempt):
+            def __call__(self, ramp, attempt, radii):
                 if attempt == 1 and ramp not in tries.fits and tries._last is not None:
                     fit, st = tries._last, tries._state
                     met = conflicts_with(fit, st.obstacles(), st.st.fit) if fit.conflicts else {}
                     tries.fits[ramp] = (fit, met)
-                return inner(ramp, attempt)
+                return inner(ramp, attempt, radii)
 
-            def clearing(self, ramp, attempt):
-                return inner.clearing(ramp, attempt)
+            def clearing(self, ramp, attempt, radii):
+                return inner.clearing(ramp, attempt, radii)
 
         return Resampler()
 
@@ -127,7 +127,7 @@ def main() -> None:
             own = sample_seed(seed, cid, sample)
             ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
                               settings=settings,
-                              resampler=tries.resampler(domain_resampler(sets, own)))
+                              resampler=tries.resampler(domain_resampler(sets, own, topo, settings)))
             for o in ic.outcomes:
                 total += 1
                 if o.first_try_ok:

@@ -143,7 +143,8 @@ def _build(job: tuple[str, int]) -> tuple:
     where = str(topo.source or name)
     try:
         ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
-                          settings=settings, resampler=domain_resampler(sets, own))
+                          settings=settings,
+                          resampler=domain_resampler(sets, own, topo, settings))
     except FlyoverError as exc:  # one interchange that cannot be built: its line, not a crash
         return name, sample, time.process_time() - t0, exc.located(where).one_line()
     secs = time.process_time() - t0

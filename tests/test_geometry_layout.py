@@ -109,7 +109,7 @@ def test_ramp_missing_its_target_is_resampled_a_bounded_number_of_times():
     feats["oA1"] = RampFeatures(5000.0, 4.0)  # a 90° turn of R 5 km does not fit in reach_m
     calls = []
 
-    def resample(ramp, attempt):
+    def resample(ramp, attempt, radii):
         calls.append((ramp, attempt))
         return RampFeatures(5000.0 if attempt < 2 else 150.0, 4.0)
 
@@ -129,13 +129,61 @@ def test_ramp_missing_its_target_is_resampled_a_bounded_number_of_times():
     assert other["first_target_radius_m"] == other["target_radius_m"] == 150.0
 
 
+def test_a_resampled_outer_connector_stays_wider_than_its_loop_and_the_loop_narrower():
+    """Sampling forbids a cloverstack's outer connector no wider than its loop
+    (:func:`flyover.geometry.feasibility.round_loops`); Algorithm 1's resampling keeps to
+    the same rule, given the radius targets in force (it drew from the whole domain)."""
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
+    from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverstack"]
+    pair = round_loops(t)[0]  # oA1 round lB1
+    domain = (30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf)
+    plain = DomainResampler(domain, (1.0, 3.0), frozenset(), 7)
+    kept = replace(plain, rounds=round_loops(t))
+    radii = {pair.connector: 60.0, pair.loop: 150.0}
+    wide = [kept(pair.connector, k, radii).radius_m for k in range(1, 41)]
+    narrow = [kept(pair.loop, k, radii).radius_m for k in range(1, 41)]
+    assert all(pair.allows(r, radii[pair.loop]) for r in wide)
+    assert all(pair.allows(radii[pair.connector], r) for r in narrow)
+    assert {kept.clearing(pair.loop, k, radii).radius_m for k in range(1, 21)} <= {30.0, 40.0}
+    # the draws without the rule do break it (so the assertions above can fail)
+    assert not all(pair.allows(plain(pair.connector, k, radii).radius_m, 150.0)
+                   for k in range(1, 41))
+    # other ramps, and a pair whose partner's target is unknown, draw from the domain
+    assert {kept("rA1", k, radii).radius_m for k in range(1, 41)} == set(domain)
+    assert {kept(pair.connector, k, {}).radius_m for k in range(1, 41)} == set(domain)
+
+
+def test_the_resampler_is_given_the_radius_targets_in_force():
+    t = catalog_topologies()["parclo_adjacent"]
+    feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
+    far = sorted(t.ramps)[:2]
+    for r in far:  # a turn of R 5 km does not fit in reach_m
+        feats[r] = RampFeatures(5000.0, 4.0)
+    seen = {}
+
+    def resample(ramp, attempt, radii):
+        seen[ramp] = dict(radii)
+        return RampFeatures(150.0, 4.0)
+
+    ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
+                           settings=LayoutSettings(max_resamples=1, rebuilds=0),
+                           resampler=resample)
+    first, second = [o.ramp for o in ic.outcomes if o.ramp in far]
+    assert set(seen) == set(far)
+    # the first one resampled sees the feature set's targets, the second the first's new one
+    assert seen[first] == {r: f.radius_m for r, f in feats.items()}
+    assert seen[second] == {**seen[first], first: 150.0}
+
+
 def test_level_ramp_slope_is_recorded_as_infeasible_not_hidden():
     t = Topology.build("cd", [Road("A1", "A"), Road("A2", "A")], [Ramp("c")],
                        [Connection("A1", "c", Label.OUT_R, 0.2),
                         Connection("c", "A1", Label.IN_R, 0.8)])
     calls = []
 
-    def resample(ramp, attempt):
+    def resample(ramp, attempt, radii):
         calls.append((ramp, attempt))
         return RampFeatures(300.0, 2.0)
 
@@ -484,7 +532,7 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
                                resampler=resampler, settings=LayoutSettings(rebuilds=0))
         return {o.ramp: o for o in ic.outcomes}
 
-    plain = build(lambda ramp, attempt: domain(ramp, attempt))  # no clearing draws
+    plain = build(lambda ramp, attempt, radii: domain(ramp, attempt, radii))  # no clearing
     assert plain["lB2"].fit.conflicts > 0 and "same-level conflict" in plain["lB2"].infeasible
     assert plain["lB2"].resamples == 3
     out = build(domain)

@@ -156,6 +156,14 @@ def _job_pids(script: str) -> list[int]:
     return [int(p) for p in out.stdout.split()]
 
 
+def _ctrl_c_heard() -> None:
+    """In the child before it runs: Ctrl-C (SIGINT) back to its default. A shell starts
+    a command it runs in the background (``cmd &``, as a CI runner may) with SIGINT
+    ignored, children inherit that, and Python then installs no KeyboardInterrupt
+    handler: Snakemake would never hear the Ctrl-C this test sends."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_an_interrupted_run_resumes_and_gives_the_same_bytes(reference, tmp_path):
     # 1. Ctrl-C while the geometry of the classes is being built (a run that the signal
     #    reached too late to stop, exit 0, is tried again in a fresh folder: a timing race
@@ -164,7 +172,7 @@ def test_an_interrupted_run_resumes_and_gives_the_same_bytes(reference, tmp_path
         wd = _workdir(tmp_path / f"attempt{attempt}")
         run = subprocess.Popen([*SNAKEMAKE, "-d", str(wd), "-j2"], cwd=wd,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                               start_new_session=True)
+                               start_new_session=True, preexec_fn=_ctrl_c_heard)
         # while a geometry job runs (its batch writes the interchanges' files as it goes)
         _wait_for(lambda: bool(_job_pids(f"{wd}/.snakemake/scripts/.*geometry_class")))
         os.killpg(run.pid, signal.SIGINT)

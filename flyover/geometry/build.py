@@ -151,8 +151,8 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
 def build_interchange(topology: Topology, lanes: Mapping[str, int],
                       features: Mapping[str, RampFeatures], *, class_id: str = "",
                       sample: int = 0, seed: int = 0, settings: LayoutSettings | None = None,
-                      resampler: Callable[[str, int], RampFeatures | None] | None = None
-                      ) -> Interchange:
+                      resampler: Callable[[str, int, Mapping[str, float]], RampFeatures | None]
+                      | None = None) -> Interchange:
     """Lay out the roads and fit every ramp of one feature set.
 
     Parameters
@@ -164,9 +164,11 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
     features
         Ramp id → :class:`RampFeatures` (targets).
     resampler
-        ``(ramp, attempt) → RampFeatures`` drawing new targets for a ramp that
-        misses its targets (Algorithm 1); ``None`` disables resampling. If it
-        also has a method ``clearing(ramp, attempt)`` (as
+        ``(ramp, attempt, radii) → RampFeatures`` drawing new targets for a ramp that
+        misses its targets (Algorithm 1; ``radii``: ramp → the radius target in force,
+        the feature set's or the one a ramp fitted so far was resampled to);
+        ``None`` disables resampling. If it
+        also has a method ``clearing(ramp, attempt, radii)`` (as
         :class:`flyover.geometry.tables.DomainResampler`), a ramp that still meets
         something at its level after that is resampled with its draws (the
         steepest slope), up to ``max_resamples`` times more.
@@ -227,6 +229,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
     """One build of :func:`build_interchange` with one seed."""
     b = LayoutState(topology, lanes, features, st, seed)
     outcomes = []
+    radii = {r: f.radius_m for r, f in features.items()}  # the targets in force
     for k, ramp in enumerate(b.order()):
         if ramp not in features:
             raise GeometryError("no features for ramp", source=topology.source, element=ramp)
@@ -288,7 +291,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         while (not fit.ok and resampler is not None and attempts < st.max_resamples
                and not _systematic(fit)):
             attempts += 1
-            new = resampler(ramp, attempts)
+            new = resampler(ramp, attempts, radii)
             if new is None:
                 break
             fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + attempts)
@@ -307,7 +310,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         k = 0
         while fit.conflicts and clearing is not None and k < st.max_resamples:
             k += 1
-            new = clearing(ramp, k)
+            new = clearing(ramp, k, radii)
             if new is None:
                 break
             fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + 7 * k + 101)
@@ -320,6 +323,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
         met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
         reason = "" if fit.ok else _reason(fit, met)
         b.record(ramp, fit)
+        radii[ramp] = fit.spec.target_radius_m
         outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs, feat))
     return Interchange(assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
 

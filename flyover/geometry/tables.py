@@ -21,7 +21,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from flyover.errors import InputFormatError
-from flyover.geometry.feasibility import LEVEL_SLOPE_PCT
+from flyover.geometry.feasibility import LEVEL_SLOPE_PCT, RoundLoop, round_loops
 from flyover.geometry.layout import Interchange, LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
@@ -95,7 +95,12 @@ class DomainResampler:
     to draw from; ``level`` the ramps whose slope is fixed at 0 (they keep it);
     ``finite`` the ramps that never get an ``inf`` radius (sampling forbids it on a
     ramp that must turn, :func:`flyover.geometry.feasibility.forbidden_features`):
-    they draw from the finite radii.
+    they draw from the finite radii. ``rounds`` the outer connectors and the loops they
+    go round (:func:`flyover.geometry.feasibility.round_loops`): given the radius targets
+    in force (``radii``: ramp → radius, the feature set's with what was resampled so
+    far), a connector draws only radii wider than its loop's by the pair's margin and a
+    loop only radii its connector is wider than, as sampling asks (a pair no value of
+    the domain satisfies draws from the whole domain).
     Deterministic: each draw is seeded by ``seed``, the ramp and the attempt.
     """
 
@@ -104,36 +109,50 @@ class DomainResampler:
     level: frozenset[str]
     seed: int
     finite: frozenset[str] = frozenset()
+    rounds: tuple[RoundLoop, ...] = ()
 
-    def _radii(self, ramp: str) -> tuple[float, ...]:
+    def _radii(self, ramp: str, radii: Mapping[str, float] | None = None) -> tuple[float, ...]:
+        out = self.radii
         if ramp in self.finite:
-            return tuple(r for r in self.radii if math.isfinite(r))
-        return self.radii
+            out = tuple(r for r in out if math.isfinite(r))
+        for pair in self.rounds if radii else ():
+            if ramp == pair.connector and pair.loop in radii:
+                kept = tuple(r for r in out if pair.allows(r, radii[pair.loop]))
+            elif ramp == pair.loop and pair.connector in radii:
+                kept = tuple(r for r in out if pair.allows(radii[pair.connector], r))
+            else:
+                continue
+            out = kept or out
+        return out
 
     def _rng(self, ramp: str, attempt: int, *salt: int) -> np.random.Generator:
         return np.random.default_rng([self.seed, zlib.crc32(ramp.encode()), attempt, *salt])
 
-    def __call__(self, ramp: str, attempt: int) -> RampFeatures | None:
+    def __call__(self, ramp: str, attempt: int,
+                 radii: Mapping[str, float] | None = None) -> RampFeatures | None:
         if not self.radii or not (self.slopes or ramp in self.level):
             return None
         rng = self._rng(ramp, attempt)
-        radius = float(rng.choice(self._radii(ramp)))
+        radius = float(rng.choice(self._radii(ramp, radii)))
         if ramp in self.level:
             return RampFeatures(radius, LEVEL_SLOPE_PCT)
         return RampFeatures(radius, float(rng.choice(self.slopes)))
 
-    def clearing(self, ramp: str, attempt: int) -> RampFeatures | None:
+    def clearing(self, ramp: str, attempt: int,
+                 radii: Mapping[str, float] | None = None) -> RampFeatures | None:
         """Targets for a ramp that still meets something at its own level after
         resampling: the steepest slope of the domain (it climbs over, or dives
         under, what it meets in the shortest distance) with a radius drawn as usual;
         ``None`` for a level ramp (no slope can help it)."""
         if not self.radii or not self.slopes or ramp in self.level:
             return None
-        radius = float(self._rng(ramp, attempt, 1).choice(self._radii(ramp)))
+        radius = float(self._rng(ramp, attempt, 1).choice(self._radii(ramp, radii)))
         return RampFeatures(radius, max(self.slopes))
 
 
-def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> DomainResampler:
+def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int,
+                     topology: Topology | None = None,
+                     settings: LayoutSettings | None = None) -> DomainResampler:
     """The :class:`DomainResampler` of a class's feature sets.
 
     The domain is the set of radius and slope values that occur for ramps in
@@ -142,6 +161,8 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> Domai
     sampling, :mod:`flyover.geometry.feasibility`): it keeps slope 0, and its
     0 is no slope to draw for other ramps. A ramp whose radius is finite in every
     feature set while others have ``inf`` (``inf`` forbidden on it) keeps a finite one.
+    Given the ``topology`` (and its ``settings``), its outer connectors are kept wider
+    than their loops (:func:`flyover.geometry.feasibility.round_loops`).
     """
     sets = [ramps for _, ramps in feature_sets.values()]
     names = {r for ramps in sets for r in ramps}
@@ -154,7 +175,8 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int) -> Domai
         finite = {r for r in names if all(math.isfinite(ramps[r].radius_m)
                                           for ramps in sets if r in ramps)}
     return DomainResampler(tuple(radii), tuple(slopes), frozenset(level), int(seed),
-                           frozenset(finite))
+                           frozenset(finite),
+                           round_loops(topology, settings) if topology is not None else ())
 
 
 def build_sample(topology: Topology, features: FeatureSet, *, class_id: str, sample: int,

@@ -165,7 +165,8 @@ def class_tables(stage):
 #     (any side or order), and ramps other than a continuation keep gap_m beyond its fixed
 #     window by the road's end (DC 26 drawn set 0: r3 ended 0.45 m from r14 on I-66 North,
 #     not exportable); catalog unchanged
-GEOMETRY_VERSION = 27
+# 28: resampling keeps an outer connector wider than its loop (the rule sampling keeps)
+GEOMETRY_VERSION = 28
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
