@@ -678,6 +678,27 @@ def test_expressways_ending_here_each_get_their_own_direction_above_the_through_
     assert {roads[r].level for r in ("B1", "B2", "C1", "C2")} == {1}
 
 
+def test_a_terminal_keeps_climb_room_for_its_own_ramps_not_every_ramp():
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    # B's ramps to A (p, q) climb at 4 %, C's (r, s) at 2 %; x and y run between B and C,
+    # which are on one level, at 1 %: they climb nothing at a terminal
+    t = _five_leg()
+    slope = dict(p=4.0, q=4.0, r=2.0, s=2.0, x=1.0, y=1.0)
+    st = LayoutSettings()
+    b = LayoutState(t, {}, {r: RampFeatures(150.0, g) for r, g in slope.items()}, st, 0)
+    base = b.roads["A1"].half_width + st.terminal_m  # from the centre, without climb room
+
+    def out(road):  # how far from the centre a carriageway begins (ends)
+        r = b.roads[road]
+        return r.t_lo if np.isfinite(r.t_lo) else -r.t_hi
+
+    for e, g in (("B", 4.0), ("C", 2.0)):
+        room = st.level_height_m / (g / 100) + st.fit.transition_m
+        for road in (f"{e}1", f"{e}2"):
+            assert out(road) == pytest.approx(base + room), (road, out(road) - base)
+
+
 def test_attachment_windows_stay_on_carriageways_that_begin_or_end_here():
     from flyover.geometry.chains import ends  # noqa: PLC0415
     from flyover.geometry.state import LayoutState  # noqa: PLC0415

@@ -165,7 +165,11 @@ def class_tables(stage):
 #     (any side or order), and ramps other than a continuation keep gap_m beyond its fixed
 #     window by the road's end (DC 26 drawn set 0: r3 ended 0.45 m from r14 on I-66 North,
 #     not exportable); catalog unchanged
-GEOMETRY_VERSION = 27
+# 28: a T's terminal keeps climb room at the lowest slope of the ramps between that
+#     expressway and a road on another level, not of every ramp (DC 26: the E Street
+#     Expressway's ramps all run on its level: its terminal 850 -> 160 m out on drawn sets);
+#     catalog unchanged (a T's ramps all climb between its two expressways)
+GEOMETRY_VERSION = 28
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
