@@ -13,9 +13,10 @@ settings.
   that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
   end/begin ``terminal_m`` from the centre on the side the topology implies,
   farther by the room a ramp at that terminal needs to climb one level there: at the
-  lowest slope of the ramps between that expressway and a road on another level
-  (``slopes``; :func:`terminal_room`), not of every ramp of the interchange (DC's
-  E Street Expressway, whose ramps all run on its level, needs none). Each through
+  lowest slope of the ramps between that expressway and a road on another level, or
+  climbing to a planned crest (``slopes``, ``climbing``; :func:`terminal_room`), not
+  of every ramp of the interchange (DC's E Street Expressway: its flyovers r12, r13,
+  not I-66/US 50's r1, r2). Each through
   expressway is on its own level (0, 1, ...); the
   terminating ones, which never meet, share the level above them (a T's
   terminating expressway above the through one).
@@ -70,17 +71,21 @@ class RoadLine:
 
 
 def terminal_room(topo: Topology, level: Mapping[str, int], slopes: Mapping[str, float],
-                  st: LayoutSettings) -> dict[str, float]:
+                  st: LayoutSettings, climbing: frozenset[str] = frozenset()
+                  ) -> dict[str, float]:
     """The room beyond ``terminal_m`` at each expressway's terminal (expressway → m): a
     climb of one level at the lowest slope target (``slopes``: ramp → %) of the ramps
     whose chain joins a carriageway of that expressway to a road on another level
-    (``level``: expressway → level), and a grade transition; 0 where none does."""
+    (``level``: expressway → level) or that climb over others between two roads on one
+    level (``climbing``: the planned crests of :class:`flyover.geometry.levels.LevelPlan`),
+    and a grade transition; 0 where none does."""
     exp = {r: e for e, rs in topo.expressways.items() for r in rs}
     low: dict[str, float] = {}
     for ramp in topo.ramps:
         g = slopes.get(ramp, 0.0)
         ea, eb = (exp.get(road_of(topo, ramp, f)) for f in (False, True))
-        if g <= 0 or ea is None or eb is None or level[ea] == level[eb]:
+        if g <= 0 or ea is None or eb is None or (level[ea] == level[eb]
+                                                  and ramp not in climbing):
             continue
         for e in (ea, eb):
             low[e] = min(low.get(e, g), g)
@@ -88,9 +93,11 @@ def terminal_room(topo: Topology, level: Mapping[str, int], slopes: Mapping[str,
 
 
 def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
-                 slopes: Mapping[str, float] | None = None) -> dict[str, RoadLine]:
+                 slopes: Mapping[str, float] | None = None,
+                 climbing: frozenset[str] = frozenset()) -> dict[str, RoadLine]:
     """Every carriageway of ``topo`` laid out (see the module doc); ``slopes`` (ramp →
-    slope target, %) size the room at a T's terminals, none without them."""
+    slope target, %) and ``climbing`` size the room at a T's terminals
+    (:func:`terminal_room`), none without them."""
     exps = topo.expressways
     term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
     conts = continuations(topo)
@@ -119,7 +126,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     # directions of their own: they never meet) on the one above them all
     n_through = sum(not term_of[e] for e in exps)
     level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
-    room = terminal_room(topo, level, slopes or {}, st)
+    room = terminal_room(topo, level, slopes or {}, st, climbing)
 
     def place(options: dict[str, float]) -> dict[str, RoadLine]:
         roads = {}
