@@ -13,13 +13,12 @@ settings.
   that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
   end/begin ``terminal_m`` from the centre on the side the topology implies,
   farther by the room a ramp at that terminal needs to climb one level there: at the
-  lowest slope of the ramps between that expressway and a road on another level, or
-  climbing to a planned crest (``slopes``, ``climbing``; :func:`terminal_room`), not
-  of every ramp of the interchange (DC's E Street Expressway: its flyovers r12, r13,
-  not I-66/US 50's r1, r2). Each through
-  expressway is on its own level (0, 1, ...); the
-  terminating ones, which never meet, share the level above them (a T's
-  terminating expressway above the through one).
+  lowest slope of the ramps between that expressway and a road on another level or
+  flying over between two on its level (``slopes``, ``climbing``;
+  :func:`terminal_room`), not of every ramp of the interchange (DC's I-66: r1, r2 and
+  r13, not the E Street Expressway's flyover r12). Each through expressway is on its
+  own level (0, 1, ...); the terminating ones, which never meet, share the level above
+  them (a T's terminating expressway above the through one).
 * Two expressways ending here that continue one another
   (:func:`flyover.geometry.chains.continuations`: DC's I-66 and Potomac Freeway) are
   one line, placed as a through expressway is: the one with ramps to a third road at
