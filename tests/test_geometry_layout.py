@@ -726,6 +726,51 @@ def test_expressways_ending_here_each_get_their_own_direction_above_the_through_
     assert {roads[r].level for r in ("B1", "B2", "C1", "C2")} == {1}
 
 
+def test_a_terminal_keeps_climb_room_for_its_own_ramps_not_every_ramp():
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    # B's ramps to A (p, q) climb at 4 %, C's (r, s) at 2 %; x and y run between B and C,
+    # which are on one level, at 1 %: right turns, they climb nothing at a terminal
+    t = _five_leg()
+    slope = dict(p=4.0, q=4.0, r=2.0, s=2.0, x=1.0, y=1.0)
+    st = LayoutSettings()
+    b = LayoutState(t, {}, {r: RampFeatures(150.0, g) for r, g in slope.items()}, st, 0)
+    assert not {"x", "y"} & set(b.plan), b.plan
+    base = b.roads["A1"].half_width + st.terminal_m  # from the centre, without climb room
+
+    def out(road):  # how far from the centre a carriageway begins (ends)
+        r = b.roads[road]
+        return r.t_lo if np.isfinite(r.t_lo) else -r.t_hi
+
+    for e, g in (("B", 4.0), ("C", 2.0)):
+        room = st.level_height_m / (g / 100) + st.fit.transition_m
+        for road in (f"{e}1", f"{e}2"):
+            assert out(road) == pytest.approx(base + room), (road, out(road) - base)
+
+
+def test_a_terminal_keeps_climb_room_for_a_flyover_between_two_roads_on_its_level():
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    # the six-leg below: z or w, a left turn between B and D (one level), is a planned
+    # flyover; at 1 % it sizes B's and D's terminals, not C's
+    t = _six_leg()
+    st = LayoutSettings()
+    left = [r for r in "zw" if r in LayoutState(
+        t, {}, {r: RampFeatures(150.0, 5.0) for r in t.ramps}, st, 0).plan]
+    assert len(left) == 1
+    slope = {r: (1.0 if r == left[0] else 5.0) for r in t.ramps}
+    b = LayoutState(t, {}, {r: RampFeatures(150.0, g) for r, g in slope.items()}, st, 0)
+    plain = layout_roads(t, {}, st)  # no climb room anywhere
+
+    def extra(road):
+        r, p = b.roads[road], plain[road]
+        return (r.t_lo - p.t_lo) if np.isfinite(r.t_lo) else (p.t_hi - r.t_hi)
+
+    for road, g in (("B1", 1.0), ("D1", 1.0), ("C1", 5.0)):
+        assert extra(road) == pytest.approx(st.level_height_m / (g / 100) + st.fit.transition_m)
+
+
 def test_attachment_windows_stay_on_carriageways_that_begin_or_end_here():
     from flyover.geometry.chains import ends  # noqa: PLC0415
     from flyover.geometry.state import LayoutState  # noqa: PLC0415
@@ -811,13 +856,11 @@ def test_cloverstack_outer_connectors_leaving_stubs_go_round_their_loops(monkeyp
     assert over(build_interchange(t, lanes, feats, seed=2113364338))
 
 
-def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():
-    from flyover.geometry.state import LayoutState  # noqa: PLC0415
-
+def _six_leg():
+    """A 6-leg: A through, B, C and D end here (on level 1); z and w link B and D
+    turning opposite ways."""
     c = Connection
-    # a 6-leg: A through, B, C and D end here (on level 1); z and w link B and D
-    # turning opposite ways
-    t = Topology.build(
+    return Topology.build(
         "six_leg", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2", "C1", "C2", "D1", "D2")],
         [Ramp(x) for x in "pqrsuvzw"],
         [c("A1", "p", Label.OUT_R, 0.3), c("p", "B1", Label.IN_M),
@@ -828,6 +871,12 @@ def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_th
          c("D2", "v", Label.OUT_M), c("v", "A2", Label.IN_R, 0.8),
          c("B2", "z", Label.OUT_R, 0.5), c("z", "D1", Label.IN_R, 0.5),
          c("D2", "w", Label.OUT_R, 0.5), c("w", "B1", Label.IN_R, 0.5)])
+
+
+def test_a_left_turn_between_two_expressways_ending_here_crests_a_level_above_theirs():
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    t = _six_leg()
     st = LayoutSettings()
     b = LayoutState(t, {}, {r: RampFeatures(150.0, 5.0) for r in t.ramps}, st, 0)
     left = [r for r in "zw" if b.moves.movement(r) > 1.0]

@@ -11,11 +11,14 @@ settings.
   placed at 45° steps, each where its legs are farthest from those placed
   (a 5-leg interchange's half lines spread round the centre). An expressway
   that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
-  end/begin ``terminal_m`` from the centre on the side the topology implies
-  (farther by ``terminal_extra``: far enough for a ramp to climb one level
-  there). Each through expressway is on its own level (0, 1, ...); the
-  terminating ones, which never meet, share the level above them (a T's
-  terminating expressway above the through one).
+  end/begin ``terminal_m`` from the centre on the side the topology implies,
+  farther by the room a ramp at that terminal needs to climb one level there: at the
+  lowest slope of the ramps between that expressway and a road on another level or
+  flying over between two on its level (``slopes``, ``climbing``;
+  :func:`terminal_room`), not of every ramp of the interchange (DC's I-66: r1, r2 and
+  r13, not the E Street Expressway's flyover r12). Each through expressway is on its
+  own level (0, 1, ...); the terminating ones, which never meet, share the level above
+  them (a T's terminating expressway above the through one).
 * Two expressways ending here that continue one another
   (:func:`flyover.geometry.chains.continuations`: DC's I-66 and Potomac Freeway) are
   one line, placed as a through expressway is: the one with ramps to a third road at
@@ -40,7 +43,7 @@ from flyover.geometry.chains import continuations, ends, road_of, terminal, wrap
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label, Topology
 
-__all__ = ["RoadLine", "layout_roads", "road_bands", "CONTINUATION_GAP_M",
+__all__ = ["RoadLine", "layout_roads", "road_bands", "terminal_room", "CONTINUATION_GAP_M",
            "CONTINUATION_SIDE_M"]
 
 #: how far short of its partner's terminal an expressway that continues it ends (m;
@@ -66,9 +69,34 @@ class RoadLine:
     half_width: float  # of its expressway, median to outer edge
 
 
+def terminal_room(topo: Topology, level: Mapping[str, int], slopes: Mapping[str, float],
+                  st: LayoutSettings, climbing: frozenset[str] = frozenset()
+                  ) -> dict[str, float]:
+    """The room beyond ``terminal_m`` at each expressway's terminal (expressway → m): a
+    climb of one level at the lowest slope target (``slopes``: ramp → %) of the ramps
+    whose chain joins a carriageway of that expressway to a road on another level
+    (``level``: expressway → level) or that climb over others between two roads on one
+    level (``climbing``: the planned crests of :class:`flyover.geometry.levels.LevelPlan`),
+    and a grade transition; 0 where none does."""
+    exp = {r: e for e, rs in topo.expressways.items() for r in rs}
+    low: dict[str, float] = {}
+    for ramp in topo.ramps:
+        g = slopes.get(ramp, 0.0)
+        ea, eb = (exp.get(road_of(topo, ramp, f)) for f in (False, True))
+        if g <= 0 or ea is None or eb is None or (level[ea] == level[eb]
+                                                  and ramp not in climbing):
+            continue
+        for e in (ea, eb):
+            low[e] = min(low.get(e, g), g)
+    return {e: st.level_height_m / (g / 100) + st.fit.transition_m for e, g in low.items()}
+
+
 def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
-                 terminal_extra: float = 0.0) -> dict[str, RoadLine]:
-    """Every carriageway of ``topo`` laid out (see the module doc)."""
+                 slopes: Mapping[str, float] | None = None,
+                 climbing: frozenset[str] = frozenset()) -> dict[str, RoadLine]:
+    """Every carriageway of ``topo`` laid out (see the module doc); ``slopes`` (ramp →
+    slope target, %) and ``climbing`` size the room at a T's terminals
+    (:func:`terminal_room`), none without them."""
     exps = topo.expressways
     term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
     conts = continuations(topo)
@@ -97,6 +125,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     # directions of their own: they never meet) on the one above them all
     n_through = sum(not term_of[e] for e in exps)
     level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
+    room = terminal_room(topo, level, slopes or {}, st, climbing)
 
     def place(options: dict[str, float]) -> dict[str, RoadLine]:
         roads = {}
@@ -105,9 +134,10 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             rs = exps[e]
             h1 = options[e]
             other = max([half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
-            inner = other + st.terminal_m + terminal_extra  # from the centre along its leg
+            inner = other + st.terminal_m + room.get(e, 0.0)  # from the centre along its leg
             if e in through_of and through_of[e].meets:  # on past the centre to its partner
-                inner = -(inner - CONTINUATION_GAP_M)
+                inner = -(other + st.terminal_m + room.get(through_of[e].kept, 0.0)
+                          - CONTINUATION_GAP_M)
             for i, r in enumerate(rs):
                 h = h1 if i == 0 else h1 + np.pi
                 o = ref[r] * np.array([np.sin(h), -np.cos(h)])

@@ -34,10 +34,13 @@ class LayoutState:
                  features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
         self.topo, self.st, self.seed = topo, st, seed
         self.features = dict(features)
-        # a T's terminal is far enough out for a ramp to climb one level there
-        slopes = [f.slope_pct for f in features.values() if f.slope_pct > 0]
-        extra = st.level_height_m / (min(slopes) / 100) + st.fit.transition_m if slopes else 0.0
-        self.roads = layout_roads(topo, lanes, st, extra)
+        # a T's terminal is far enough out for its ramps to climb one level there: those
+        # to a road on another level and the planned flyovers (the crests follow from
+        # the roads' headings, which this room does not change)
+        slopes = {r: f.slope_pct for r, f in self.features.items()}
+        roads = layout_roads(topo, lanes, st, slopes)
+        climbing = frozenset(LevelPlan(Movements(topo, roads), self.features, st).crests)
+        self.roads = layout_roads(topo, lanes, st, slopes, climbing)
         self.g = topo.graph
         self.moves = Movements(topo, self.roads)
         width = {r: self.moves.lanes(r) * st.ramp_lane_width_m for r in topo.ramps}

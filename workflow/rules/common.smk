@@ -166,7 +166,12 @@ def class_tables(stage):
 #     window by the road's end (DC 26 drawn set 0: r3 ended 0.45 m from r14 on I-66 North,
 #     not exportable); catalog unchanged
 # 28: resampling keeps an outer connector wider than its loop (the rule sampling keeps)
-GEOMETRY_VERSION = 28
+# 29: a T's terminal keeps climb room at the lowest slope of the ramps between that
+#     expressway and a road on another level, or flying over between two on its level, not
+#     of every ramp (DC 26 drawn sets 0 and 3: I-66's terminal 836 -> 511 m out, the E
+#     Street Expressway's 853 -> 528 m); catalog unchanged (a T's ramps all climb between
+#     its two expressways)
+GEOMETRY_VERSION = 29
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
