@@ -17,8 +17,10 @@ Objective (whole population at once, compiled: :mod:`flyover.geometry._kernels`)
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
 and already fitted ramps (the samples in conflict, plus how deep they are in,
-so that the search feels its way out of one), and curvature jumps at joints
-(G2 preferred).
+so that the search feels its way out of one), curvature jumps at joints
+(G2 preferred), and length over the ramp's bound (:meth:`RampSpec.max_length_m`: a
+multiple of the least it needs; a candidate over it is never acceptable, and a fit over
+it is not :attr:`RampFit.ok`: a ramp is never stretched to meet its targets).
 The search (:func:`evolve`) is adaptive differential evolution (JADE:
 current-to-pbest/1/bin with an archive, ``F`` and ``CR`` adapted from the
 successful trials), one objective call per generation for the whole

@@ -62,7 +62,7 @@ class LayoutSettings:
     #: its windows at its radius, its turn, its climb to its crest and down at its slope),
     #: and its two tapers (``gap_m`` each); longer is not ok (resampled or recorded, never
     #: stretched; :meth:`flyover.geometry.specs.RampSpecs.least_m`); ``None``: unbounded
-    max_length_ratio: float | None = 2.0
+    max_length_ratio: float | None = 2.5
     #: a loop an outer connector goes round is an obstacle at every height except within
     #: this far (m) of its ends, where both run beside their shared road
     keep_out_trim_m: float = 40.0

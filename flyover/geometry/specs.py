@@ -14,8 +14,9 @@ attachment windows, the ramps fitted so far and, for a stub, its free end
 * A stub ramp with no end (it splits into other ramps) or no start (formed by
   merging ramps) gets a free end (:class:`flyover.geometry.free_end.FreeEnds`: its
   height, how far out, beside which road, the room its children need).
-* A ramp between two attached ends is no longer than (1 + ``length_margin``) times
-  what it needs (:meth:`RampSpecs.need_m`) beyond the room it keeps.
+* A ramp between two attached ends attaches to a road no farther than (1 +
+  ``length_margin``) times what it needs (:meth:`RampSpecs.need_m`) beyond the room it
+  keeps (its windows).
 * A ramp that climbs may run straight along its parent's heading at either end
   for as long as the climb from that end takes (its leads).
 * A ramp is no longer than ``max_length_ratio`` times the least it needs, and its two

@@ -165,7 +165,11 @@ def class_tables(stage):
 #     (any side or order), and ramps other than a continuation keep gap_m beyond its fixed
 #     window by the road's end (DC 26 drawn set 0: r3 ended 0.45 m from r14 on I-66 North,
 #     not exportable); catalog unchanged
-GEOMETRY_VERSION = 27
+# 28: a ramp is no longer than max_length_ratio x the least it needs (its plan between its
+#     windows at 0.95 x its radius, its turn, its climb to its crest and down) and two tapers:
+#     the search is penalised beyond it and a fit over it is not ok (resampled or recorded
+#     "length ... over bound ..."); the 5-8.7 km flyovers of 1 % slope targets no longer wander
+GEOMETRY_VERSION = 28
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
