@@ -168,9 +168,11 @@ def _build(job: tuple[str, int]) -> tuple:
     stretch = {o.ramp: o.fit.length_m / need_m(o.fit, settings) for o in ic.outcomes}
     detour = {o.ramp: o.fit.length_m / least_m(o.fit, settings) if o.fit.ok else math.nan
               for o in ic.outcomes}  # a ramp off its radius can be shorter than the least
+    over = {o.ramp: o.fit.length_m > o.fit.max_length_m for o in ic.outcomes}
     for r in rows:
         r["stretch"] = stretch[r["ramp"]]
         r["detour"] = detour[r["ramp"]]
+        r["over_bound"] = over[r["ramp"]]
     for r in rows:
         r["xodr_radius_m"], r["xodr_slope_pct"], r["xodr_ref_radius_m"], r["xodr_3pt_radius_m"] = \
             xodr.get(r["ramp"], (math.nan,) * 4)
@@ -644,6 +646,9 @@ def main() -> None:
         print(f"  {name:<17} median {np.median(xs):5.2f}  p95 {np.percentile(xs, 95):5.2f}  "
               f"max {max(xs):5.2f}  over 1.5: {sum(x > 1.5 for x in xs)}, over 2: "
               f"{sum(x > 2 for x in xs)} of {len(xs)}")
+    print(f"ramps longer than their bound (geometry.max_length_ratio, RampFit.max_length_m): "
+          f"{sum(r['over_bound'] for r in rows)} of {len(rows)}, of them ok: "
+          f"{sum(r['over_bound'] and r['ok'] for r in rows)}")
     print("footprint (bounding box of the ramps, km²):")
     for name, bs in sorted(boxes.items()):
         print(f"  {name:<17} median {np.median(bs):6.2f}  max {max(bs):6.2f}  (n={len(bs)})")

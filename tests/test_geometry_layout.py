@@ -475,12 +475,16 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
         return out
 
     monkeypatch.setattr(build, "_reroute", spy)
-    ic = build_interchange(t, lanes, feats, seed=2735729615)
+    # (the seed's scenario was found without the length bound, which changes every search's
+    # path: geometry.max_length_ratio)
+    unbounded = LayoutSettings(max_length_ratio=None)
+    ic = build_interchange(t, lanes, feats, seed=2735729615, settings=unbounded)
     assert calls == [("rR", calls[0][1], ["rL"])] and calls[0][1] > 0
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
     # without it rR keeps its conflict with rL, and says so
     monkeypatch.setattr(build, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
-    ic = build_interchange(t, lanes, feats, seed=2735729615, settings=LayoutSettings(rebuilds=0))
+    ic = build_interchange(t, lanes, feats, seed=2735729615,
+                           settings=replace(unbounded, rebuilds=0))
     r_r = next(o for o in ic.outcomes if o.ramp == "rR")
     assert r_r.fit.conflicts > 0 and "with rL" in r_r.infeasible
 
@@ -528,8 +532,10 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
     assert DomainResampler((30.0,), (0.0,), frozenset({"c"}), 1).clearing("c", 1) is None
 
     def build(resampler):
+        # (the seed's scenario was found without the length bound: geometry.max_length_ratio)
         ic = build_interchange(t, lanes, feats, class_id="c0", sample=11, seed=323153949,
-                               resampler=resampler, settings=LayoutSettings(rebuilds=0))
+                               resampler=resampler,
+                               settings=LayoutSettings(rebuilds=0, max_length_ratio=None))
         return {o.ramp: o for o in ic.outcomes}
 
     plain = build(lambda ramp, attempt, radii: domain(ramp, attempt, radii))  # no clearing
@@ -567,7 +573,9 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
         return build_interchange(t, lanes, feats, class_id="c0", sample=57, seed=seed,
                                  resampler=domain,
                                  settings=LayoutSettings(rebuilds=rebuilds, restarts=1,
-                                                         max_resamples=1))
+                                                         max_resamples=1,
+                                                         # the seed's scenario: unbounded
+                                                         max_length_ratio=None))
 
     once = build(0)
     met = {o.ramp: o for o in once.outcomes if o.fit.conflicts}
@@ -644,7 +652,8 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
 
     t = catalog_topologies()["j1"]
     feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
-    st = LayoutSettings(rebuilds=0)
+    # (the seed's scenario was found without the length bound: geometry.max_length_ratio)
+    st = LayoutSettings(rebuilds=0, max_length_ratio=None)
     ic = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=4, settings=st)
     assert all(o.first_try_ok for o in ic.outcomes)
     jumps = _grade_jumps(ic.geometry)

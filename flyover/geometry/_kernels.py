@@ -665,9 +665,25 @@ POINT_MARGIN = 0.045
 #: weight of the pointwise term (``spike``: the share the tightest point falls short)
 SPIKE_WEIGHT = 10.0
 
+#: the search holds a ramp this much (relative) under its length bound, so that the final
+#: dense measurement (a little longer than the search's samples) stays within it too
+LENGTH_MARGIN = 0.005
+#: weight of the length term (``over``: the share a candidate is longer than its bound)
+OVER_WEIGHT = 10.0
+
 #: rows of :func:`objective_terms` (the penalty terms of the ramp objective)
 TERMS = ("rad_err", "smooth", "shortfall", "excess", "spread", "turn_err", "g2", "conflicts",
-         "depth", "spike")
+         "depth", "spike", "over")
+
+
+@njit(cache=True, inline="always")
+def length_bound(least_plan, climb, ratio, tapers):  # pragma: no cover - compiled
+    """The longest a ramp may be (see :meth:`flyover.geometry.fit.RampSpec.max_length_m`):
+    ``ratio`` × the longer of what its plan needs and its ``climb``, and its ``tapers``
+    (``ratio`` ``inf``: no bound)."""
+    if ratio == np.inf:
+        return np.inf
+    return ratio * max(least_plan, climb) + tapers
 
 
 @njit(cache=True, inline="always")
@@ -686,15 +702,17 @@ def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no
             + 10.0 * max(t[5, p] - 0.05, 0.0)
             + conflict_weight * (t[7, p] + depth_weight * t[8, p])
             + 0.01 * min(t[6, p], 10.0) + 2.0 * t[3, p] ** 2
-            + compact_weight * t[4, p] + SPIKE_WEIGHT * (t[9, p] + 10.0 * t[9, p] ** 2))
+            + compact_weight * t[4, p] + SPIKE_WEIGHT * (t[9, p] + 10.0 * t[9, p] ** 2)
+            + OVER_WEIGHT * (t[10, p] + 10.0 * t[10, p] ** 2))
 
 
 @njit(cache=True, nogil=True)
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
                     z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
                     spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound, gap):  # pragma: no cover - compiled
-    """The ramp objective's terms (rows :data:`TERMS`, ``(10, P)``) of decision vectors ``x``.
+                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound, gap, least_plan,
+                    length_ratio, tapers):  # pragma: no cover - compiled
+    """The ramp objective's terms (rows :data:`TERMS`, ``(11, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
     (relative; for an ``inf`` target, how far it falls short of ``inf_floor``,
@@ -706,7 +724,10 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     start / end station counts), the turn error, the curvature jumps at joints
     (scaled like smoothness), conflicting samples and their depth, and the spike: how
     far (relative) the tightest lane-centre radius at any sample falls short of the
-    target (``inf``: ``inf_floor``) less :data:`POINT_MARGIN` (0: nowhere tighter). The crest is
+    target (``inf``: ``inf_floor``) less :data:`POINT_MARGIN` (0: nowhere tighter), and
+    ``over``: how far (relative) the candidate is longer than its length bound
+    (:func:`length_bound` of ``least_plan`` and its climb to its crest and down, less
+    :data:`LENGTH_MARGIN`; ``length_ratio`` ``inf``: none). The crest is
     the higher end or ``z_crest`` (``-inf``: none).
 
     ``bound`` ``(P,)``: a candidate whose energy (:func:`energy` with ``weights``)
@@ -725,7 +746,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     zc = np.maximum(np.maximum(za, zb), z_crest)
     g = grade if grade > 0 else 1.0
     t, xs, ys, tx, ty, sp, kap, ss, cx, cy, zz, ln = _scratch(m, ctrl.shape[1] * m)
-    out = np.empty((10, p_count))
+    out = np.empty((11, p_count))
     inf_target = np.isinf(r_target)
     # nowhere tighter than this (pointwise): the target (inf: the floor) less the margin
     r_point = (inf_floor if inf_target else r_target) * (1.0 - POINT_MARGIN)
@@ -757,6 +778,8 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
         out[4, p] = spread_a * (st[0, p] / compact_m) ** 2 + spread_b * (st[1, p] / compact_m) ** 2
         out[5, p] = abs(turned - turn[p])
         out[9, p] = max(r_point - rpt, 0.0) / r_point
+        longest = length_bound(least_plan, need, length_ratio, tapers) * (1.0 - LENGTH_MARGIN)
+        out[10, p] = max(length / longest - 1.0, 0.0)
         out[7, p] = 0.0
         out[8, p] = 0.0
         if _energy1(out, p, weights[0], weights[1], weights[2]) > bound[p]:
@@ -783,13 +806,14 @@ def energy(terms, conflict_weight, depth_weight, compact_weight):  # pragma: no 
 @njit(cache=True, nogil=True)
 def acceptable(terms, accept_radius):  # pragma: no cover - compiled
     """Candidates meeting the targets on these samples: radius, length, turn, no conflict,
-    excess under 30 %, nowhere tighter than the target less :data:`POINT_MARGIN`."""
+    excess under 30 %, nowhere tighter than the target less :data:`POINT_MARGIN`, within
+    the length bound less :data:`LENGTH_MARGIN`."""
     p_count = terms.shape[1]
     out = np.zeros(p_count, np.bool_)
     for p in range(p_count):
         out[p] = (abs(terms[0, p]) < accept_radius and terms[2, p] == 0.0
                   and terms[5, p] < 0.05 and terms[7, p] == 0.0 and terms[3, p] < 0.3
-                  and terms[9, p] == 0.0)
+                  and terms[9, p] == 0.0 and terms[10, p] == 0.0)
     return out
 
 

@@ -400,6 +400,8 @@ def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
                      f"{sp.target_radius_m:g} m")
     elif not fit.radius_ok:
         parts.append(f"radius: {fit.min_radius_m:.1f} m instead of {sp.target_radius_m:g} m")
+    if not fit.length_ok:
+        parts.append(f"length {fit.length_m:,.0f} m over bound {fit.max_length_m:,.0f} m")
     if fit.conflicts:
         with_ = ", ".join(f"{k} ({n})" for k, n in sorted((met or {}).items()))
         parts.append(f"same-level conflict ({fit.conflicts} samples)"

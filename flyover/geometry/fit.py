@@ -17,8 +17,10 @@ Objective (whole population at once, compiled: :mod:`flyover.geometry._kernels`)
 error² + slope-length shortfall² (the paper's penalty), plus hard-constraint
 penalties: wrong total turn (loops, cusps), same-level conflicts with roads
 and already fitted ramps (the samples in conflict, plus how deep they are in,
-so that the search feels its way out of one), and curvature jumps at joints
-(G2 preferred).
+so that the search feels its way out of one), curvature jumps at joints
+(G2 preferred), and length over the ramp's bound (:meth:`RampSpec.max_length_m`: a
+multiple of the least it needs; a candidate over it is never acceptable, and a fit over
+it is not :attr:`RampFit.ok`: a ramp is never stretched to meet its targets).
 The search (:func:`evolve`) is adaptive differential evolution (JADE:
 current-to-pbest/1/bin with an archive, ``F`` and ``CR`` adapted from the
 successful trials), one objective call per generation for the whole
@@ -57,7 +59,7 @@ from scipy.optimize import differential_evolution
 from flyover.geometry import _kernels
 from flyover.geometry.bezier import (heading_vec, held_radius, lane_centre, lane_radius,
                                      sample_spline)
-from flyover.geometry.profile import elevation_polys, max_grade
+from flyover.geometry.profile import climb_distance, elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
@@ -182,6 +184,25 @@ class RampSpec:
     lead_m: tuple[float | None, float | None] = (None, None)
     #: an ``inf`` radius target: the lane-centre radius is never below this (m)
     inf_floor_m: float = 30.0
+    #: the least (m) its plan needs: the shortest path between its windows at 0.95 × its
+    #: radius, its turn at that radius (:meth:`flyover.geometry.specs.RampSpecs.least_m`)
+    least_m: float = 0.0
+    #: how many times the least it needs the ramp may be (``inf``: unbounded);
+    #: see :meth:`max_length_m`
+    length_ratio: float = math.inf
+    #: what the ramp may use on top for its diverge / merge tapers (m)
+    tapers_m: float = 0.0
+
+    def max_length_m(self, za: float, zc: float, zb: float, transition_m: float) -> float:
+        """The longest this ramp may be with ends at heights ``za``, ``zb`` and crest ``zc``:
+        ``length_ratio`` × the longer of :attr:`least_m` and its climb to its crest and down
+        at its slope target (vertical curves of ``transition_m`` included), and its tapers
+        (:func:`flyover.geometry._kernels.length_bound`, as the search bounds it)."""
+        g = self.target_slope_pct / 100.0
+        climb = 0.0 if g <= 0 else float(climb_distance(zc - za, g, transition_m)
+                                          + climb_distance(zc - zb, g, transition_m))
+        return float(_kernels.length_bound(float(self.least_m), climb,
+                                           float(self.length_ratio), float(self.tapers_m)))
 
     def leads(self) -> tuple[bool, bool]:
         """Whether the start / end has a lead (only attached ends have one; both or neither)."""
@@ -234,6 +255,8 @@ class RampFit:
     z_crest: float
     #: the tightest lane-centre radius at any point (m), not held over any length
     point_radius_m: float = math.inf
+    #: the longest it may be (:meth:`RampSpec.max_length_m` at its ends' heights and crest)
+    max_length_m: float = math.inf
 
     @property
     def radius_ok(self) -> bool:
@@ -250,8 +273,13 @@ class RampFit:
         return abs(self.max_slope_pct - self.spec.target_slope_pct) <= 0.2
 
     @property
+    def length_ok(self) -> bool:
+        """No longer than its bound (:attr:`max_length_m`): a ramp is never stretched."""
+        return self.length_m <= self.max_length_m
+
+    @property
     def ok(self) -> bool:
-        return self.radius_ok and self.slope_ok and self.conflicts == 0
+        return self.radius_ok and self.slope_ok and self.length_ok and self.conflicts == 0
 
     def pieces(self) -> tuple[BezierPiece, ...]:
         smp = sample_spline(self.ctrl, 400)
@@ -396,11 +424,12 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
                float(settings.compact_weight))
     w = np.array(weights)
     gap = _self_gap(spec, search=True)
+    longest = (float(spec.least_m), float(spec.length_ratio), float(spec.tapers_m))
 
     def table(x: np.ndarray, bound: np.ndarray | None = None) -> np.ndarray:
         x = np.ascontiguousarray(x, float)
         b = np.full(x.shape[1], np.inf) if bound is None else np.ascontiguousarray(bound, float)
-        return _kernels.objective_terms(x, *args, w, b, gap)
+        return _kernels.objective_terms(x, *args, w, b, gap, *longest)
 
     def terms(x: np.ndarray) -> dict[str, np.ndarray]:
         return dict(zip(_kernels.TERMS, table(x)))
@@ -621,7 +650,8 @@ def _measured(spec: RampSpec, ctrl: np.ndarray, start_s: float, end_s: float, po
                             ga, gb)
     slope = max_grade(polys, length) * 100.0
     fit = RampFit(spec, ctrl, start_s, end_s, pose_a, pose_b, polys, length, rmin, slope, 0,
-                  evaluations, seconds, zc, rpt)
+                  evaluations, seconds, zc, rpt,
+                  spec.max_length_m(za, zc, zb, settings.transition_m))
     return recount(fit, obstacles, settings)
 
 

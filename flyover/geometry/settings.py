@@ -58,6 +58,11 @@ class LayoutSettings:
     #: ~1.6 km in ../shared/osm): a (radius, slope) whose turn or climb needs more is no
     #: combination sampling offers that ramp (:func:`flyover.geometry.feasibility.forbidden_features`)
     max_ramp_length_m: float = 1500.0
+    #: a fitted ramp is no longer than this many times the least it needs (its plan between
+    #: its windows at its radius, its turn, its climb to its crest and down at its slope),
+    #: and its two tapers (``gap_m`` each); longer is not ok (resampled or recorded, never
+    #: stretched; :meth:`flyover.geometry.specs.RampSpecs.least_m`); ``None``: unbounded
+    max_length_ratio: float | None = 2.5
     #: a loop an outer connector goes round is an obstacle at every height except within
     #: this far (m) of its ends, where both run beside their shared road
     keep_out_trim_m: float = 40.0

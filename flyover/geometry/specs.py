@@ -14,10 +14,18 @@ attachment windows, the ramps fitted so far and, for a stub, its free end
 * A stub ramp with no end (it splits into other ramps) or no start (formed by
   merging ramps) gets a free end (:class:`flyover.geometry.free_end.FreeEnds`: its
   height, how far out, beside which road, the room its children need).
-* A ramp between two attached ends is no longer than (1 + ``length_margin``) times
-  what it needs (:meth:`RampSpecs.need_m`) beyond the room it keeps.
+* A ramp between two attached ends attaches to a road no farther than (1 +
+  ``length_margin``) times what it needs (:meth:`RampSpecs.need_m`) beyond the room it
+  keeps (its windows).
 * A ramp that climbs may run straight along its parent's heading at either end
   for as long as the climb from that end takes (its leads).
+* A ramp is no longer than ``max_length_ratio`` times the least it needs, and its two
+  tapers (``gap_m`` each): the least is the longer of what its plan needs
+  (:meth:`RampSpecs.least_m`: the shortest path between its windows at 0.95 × its radius,
+  its turn at that radius; a stub: as far out as its free end may lie, which is where
+  its children need it) and its climb to its crest and down at its slope target, which
+  the search counts for each candidate (:meth:`flyover.geometry.fit.RampSpec.max_length_m`).
+  A fit over it is not ok: it is resampled or recorded, never stretched.
 """
 
 from __future__ import annotations
@@ -25,7 +33,8 @@ from __future__ import annotations
 import numpy as np
 
 from flyover.geometry.chains import Movements, ends, wrap
-from flyover.geometry.fit import RampSpec
+from flyover.geometry.dubins import shortest
+from flyover.geometry.fit import Rail, RampSpec
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.free_end import FreeEnds
 from flyover.geometry.levels import LevelPlan
@@ -101,9 +110,31 @@ class RampSpecs:
         a = w.rail(ramp, feat, start, True, loop, width, extra, bound, level) if start else None
         b = w.rail(ramp, feat, end, False, loop, width, extra_b, bound, level) if end else None
         crest = plan.get(ramp)
+        cd = self.moves.same_road(ramp)  # a collector-distributor road: no search, no bound
+        bounded = st.max_length_ratio is not None and not cd
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat),
-                        inf_floor_m=float(st.inf_min_radius_m))
+                        inf_floor_m=float(st.inf_min_radius_m),
+                        least_m=0.0 if cd else self.least_m(a, b, free, turn, feat),
+                        length_ratio=float(st.max_length_ratio) if bounded else np.inf,
+                        tapers_m=2.0 * st.gap_m)
+
+    def least_m(self, a: Rail | None, b: Rail | None, free, turn: float, feat: RampFeatures,
+                n: int = 24) -> float:
+        """The least a ramp's plan needs (m): the longer of the shortest path of curvature at
+        most 1 / (0.95 × its radius target) (``inf``: ``inf_min_radius_m``) from a point of
+        its start window heading along its parent to one of its end window
+        (:func:`flyover.geometry.dubins.shortest`, each window sampled at ``n`` stations)
+        and its turn at that radius; a stub: the farthest out its free end may lie (where
+        :class:`flyover.geometry.free_end.FreeEnds` puts it for its children)."""
+        r = 0.95 * feat.radius_m if np.isfinite(feat.radius_m) else self.st.inf_min_radius_m
+        arc = abs(turn) * r
+        if free is not None:
+            return max(arc, float(np.hypot(free.forward[1], max(map(abs, free.lateral)))))
+        pa, ha, _ = a.at(np.linspace(a.lo, a.hi, n))
+        pb, hb, _ = b.at(np.linspace(b.lo, b.hi, n))
+        path = shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r)
+        return max(arc, float(path.min()))
 
     def need_m(self, turn: float, feat: RampFeatures, start, end) -> float:
         """What a ramp between two attached ends needs beyond the room it keeps from the

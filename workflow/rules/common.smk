@@ -171,7 +171,11 @@ def class_tables(stage):
 #     of every ramp (DC 26 drawn sets 0 and 3: I-66's terminal 836 -> 511 m out, the E
 #     Street Expressway's 853 -> 528 m); catalog unchanged (a T's ramps all climb between
 #     its two expressways)
-GEOMETRY_VERSION = 29
+# 30: a ramp is no longer than max_length_ratio x the least it needs (its plan between its
+#     windows at 0.95 x its radius, its turn, its climb to its crest and down) and two tapers:
+#     the search is penalised beyond it and a fit over it is not ok (resampled or recorded
+#     "length ... over bound ..."); the 5-8.7 km flyovers of 1 % slope targets no longer wander
+GEOMETRY_VERSION = 30
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
