@@ -74,7 +74,7 @@ def test_the_search_finds_a_flyover_within_its_bound_where_unbounded_it_wanders(
 def test_a_ramp_that_cannot_meet_its_targets_within_its_bound_is_resampled_then_recorded():
     drawn = []
 
-    def resampler(ramp, attempt):
+    def resampler(ramp, attempt, radii):
         drawn.append((ramp, attempt))
         return RampFeatures(150.0, 6.0)
 
