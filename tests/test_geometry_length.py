@@ -6,8 +6,10 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from flyover.geometry.build import _reason
+from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import Rail, RampSpec, fit_ramp
 from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
 from flyover.topology.catalog import catalog_topologies
@@ -88,3 +90,28 @@ def test_a_ramp_that_cannot_meet_its_targets_within_its_bound_is_resampled_then_
         assert not o.fit.ok and o.resamples == 1
         assert o.fit.length_m > o.fit.max_length_m
         assert "over bound" in o.infeasible, o.infeasible
+
+
+@pytest.mark.slow
+def test_a_build_the_dense_check_finds_at_a_level_is_built_again():
+    """A catalog turbine feature set (sample 6 of the workflow's t=2 array) with the length
+    bound: no fit counts a conflict on its own samples, but the dense check (lane centres
+    every metre, as validation's clearance check) finds lB1 1.3 m above B1 where it leaves
+    eB1. That build is not kept: the interchange is built again with other seeds."""
+    t = catalog_topologies()["turbine"]
+    lanes = {"A1": 4, "A2": 5, "B1": 3, "B2": 5}
+    targets = {"eA1": (40, 5), "eA2": (40, 3), "eB1": (40, 4), "eB2": (40, 3),
+               "lA1": (40, 4), "lA2": (40, 5), "lB1": (40, 1), "lB2": (40, 5),
+               "rA1": (30, 4), "rA2": (100, 3), "rB1": (30, 4), "rB2": (30, 4)}
+    feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
+    seed = 2564658342
+
+    def build(rebuilds):
+        return build_interchange(t, lanes, feats, class_id="c0", sample=6, seed=seed,
+                                 settings=LayoutSettings(rebuilds=rebuilds, max_length_ratio=2.5))
+
+    once = build(0)
+    assert not any(o.fit.conflicts for o in once.outcomes)
+    assert [c.ramp for c in same_level_conflicts(once.geometry)] == ["lB1"]
+    again = build(3)
+    assert again.geometry.seed != seed and not same_level_conflicts(again.geometry)

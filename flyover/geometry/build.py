@@ -58,6 +58,7 @@ from typing import Callable, Mapping
 from flyover.geometry.assemble import assemble
 from flyover.geometry.beside import child_room_fences
 from flyover.geometry.collector import collector_fit
+from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
@@ -200,6 +201,11 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             first.setdefault(o.ramp, o.first_try_ok)
         rank = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
                 sum(o.fit.conflicts for o in ic.outcomes), sum(not o.fit.ok for o in ic.outcomes))
+        if rank[0] == 0 and (dense := same_level_conflicts(ic.geometry)):
+            # the fits' own count is on their samples; the dense check (lane centres every
+            # metre, as validation's clearance check) can still find a ramp at a road's or
+            # another ramp's level: that build is no better than one the fits saw meet
+            rank = (len({c.ramp for c in dense}), len(dense), rank[2])
         log.debug("%s sample %s build %d (seed %d): %d ramps meeting something at their "
                   "level (%d samples), %d missing targets", class_id, sample, k, ks, *rank)
         if best is None or rank < best[0]:

@@ -175,7 +175,10 @@ def class_tables(stage):
 #     windows at 0.95 x its radius, its turn, its climb to its crest and down) and two tapers:
 #     the search is penalised beyond it and a fit over it is not ok (resampled or recorded
 #     "length ... over bound ..."); the 5-8.7 km flyovers of 1 % slope targets no longer wander
-GEOMETRY_VERSION = 30
+# 31: a build the dense check (same_level_conflicts, as validation's clearance check) finds
+#     a ramp at another's level in is built again with other seeds, as one whose fits count a
+#     conflict (turbine workflow sample 6 at 30: lB1 1.3 m above B1 where it leaves eB1)
+GEOMETRY_VERSION = 31
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
