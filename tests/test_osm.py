@@ -476,3 +476,18 @@ def test_a_ramp_merged_into_keeps_its_node_when_its_way_goes_on(tmp_path):
                               [Ramp(r) for r in ("r1a", "r1b", "r2", "r3", "r4")],
                               [Connection(u, v, Label(lab)) for u, v, lab in e])
     assert t.n_ramps == 5 and class_id(t) == class_id(expected)
+
+
+@pytest.mark.parametrize("turn", [(-100, 30), (-30, 30)])
+def test_a_stub_whose_carriageways_meet_end_to_start_is_two_carriageways(tmp_path, turn):
+    """B's two carriageways end at grade 1.1 km out, drawn end to start at one node (as DC's
+    US 50 at 23rd Street): eastbound ends where westbound begins, turning back by 163° or
+    135°. They are two carriageways of one leg, not one road that goes out and comes back,
+    so the interchange is the catalog's trumpet and the self-check finds its 3 legs."""
+    ways = trumpet_ways()
+    ways[1] = carriageway([(400, -15), (1500, -15)], "B 2")
+    ways[0] = carriageway([(1500, -15), (1500 + turn[0], -15 + turn[1]), (1300, 15), (400, 15)],
+                          "B 2")
+    t = only(write_osm(tmp_path / "stub.osm", ways))
+    assert class_id(t) == class_id(CATALOG["trumpet"])
+    assert t.legs == 3 and t.attrs["osm"]["self_check"] == []

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import gc
 import logging
+import math
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
@@ -58,6 +59,7 @@ log = logging.getLogger(__name__)
 ROAD, LINK = "road", "link"
 _ROAD_KEYS = ("road", "local")  # topology road keys: a motorway carriageway, an ordinary road
 _PROBE_M = 60.0
+_TURN_BACK_DEG = 90.0  # a carriageway never turns so at one node (Stretches break there)
 
 
 @dataclass(frozen=True)
@@ -316,6 +318,14 @@ class _Network:
                        f"way {wid_road}: snapped", logging.WARNING)
 
     # -- 5. stretches -----------------------------------------------------
+    def _turns_back(self, a: int, n: int, b: int) -> bool:
+        """Whether a road turns by more than :data:`_TURN_BACK_DEG` at node ``n`` (from
+        ``a`` to ``b``): no carriageway does; two carriageways of a road that ends at grade,
+        drawn end to start at one node (DC's US 50 stub at 23rd Street), do."""
+        pa, pn, pb = self.xy[a], self.xy[n], self.xy[b]
+        u, v = _unit(pn - pa), _unit(pb - pn)
+        return float(np.dot(u, v)) < math.cos(math.radians(_TURN_BACK_DEG))
+
     def build_stretches(self) -> list[_Stretch]:
         out: list[_Stretch] = []
         succ, pred, seg, wcls, pos = self.succ, self.pred, self.seg, self.cls, self.xy
@@ -324,6 +334,8 @@ class _Network:
             p, s = pred.get(n), succ.get(n)
             if not p or not s or len(p) != 1 or len(s) != 1 or wcls[seg[(p[0], n)]] != wcls[seg[(n, s[0])]]:
                 breaks.add(n)
+            elif wcls[seg[(p[0], n)]] == ROAD and self._turns_back(p[0], n, s[0]):
+                breaks.add(n)  # one carriageway ends where the other begins (_group_roads)
         starts = sorted(n for n in breaks if succ.get(n))
         limit = len(seg) + 1
         for s0 in starts:
@@ -446,6 +458,11 @@ class _Network:
         (at ordinary roads or the extract's edge), not into links. For the self-check."""
         self.dead_in = {n for n, s in self.succ.items() if s and not self.pred.get(n)}
         self.dead_out = {n for n, p in self.pred.items() if p and not self.succ.get(n)}
+        back = {n for n, p in self.pred.items() if len(p) == 1 and len(self.succ.get(n, ())) == 1
+                and self.cls[self.seg[(p[0], n)]] == ROAD == self.cls[self.seg[(n, self.succ[n][0])]]
+                and self._turns_back(p[0], n, self.succ[n][0])}
+        self.dead_in |= back  # one carriageway ends there, the other begins (build_stretches)
+        self.dead_out |= back
 
     # -- 4. pruning -------------------------------------------------------
     def prune_links(self) -> None:
@@ -553,6 +570,8 @@ class _Builder:
                     if match == 0 and not (len(ins) == 1 and len(outs) == 1):
                         continue
                     align = float(np.dot(d_in, _unit(o.xy[1] - o.xy[0])))
+                    if align < math.cos(math.radians(_TURN_BACK_DEG)):
+                        continue  # it turns back: another carriageway (Stretches break here)
                     scored.append((-match, -align, i.idx, o.idx))
             for _, _, i, o in sorted(scored):
                 if i not in nxt and o not in prv:
