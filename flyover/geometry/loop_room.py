@@ -22,7 +22,7 @@ from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 
-__all__ = ["LoopRoom"]
+__all__ = ["LoopRoom", "round_need"]
 
 
 class LoopRoom:
@@ -88,7 +88,14 @@ class LoopRoom:
                    feat: RampFeatures) -> float:
         """Where along ``road`` a ramp turning at its target radius must attach to go round
         the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
-        distance an arc of that radius needs to get as far from the road."""
+        distance a connector needs to get as far from the road (plus the room between
+        their centre lines) when it turns at its radius until it runs at 45° to the road,
+        then straight on (:func:`round_need`), as a real outer connector runs across its
+        quadrant's diagonal outside the loop (the same shape as
+        :meth:`flyover.geometry.levels.LevelPlan.round_room`). A lone arc of its radius
+        (what was required before) leaves it inside the loop's far side whenever the
+        loop reaches farther from the corner than the arc: the fit then went over the
+        loop (one in ten of the workflow's cloverleaf connectors)."""
         r, st = self.roads[road], self.st
         d = np.array([math.cos(r.heading), math.sin(r.heading)])
         rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
@@ -96,6 +103,20 @@ class LoopRoom:
         lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
         rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
         c = width + self.fitted.width[loop] / 2 + 1.0
-        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
-                        rad + c)
+        need = round_need(lat + c, rad)
         return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
+
+
+def round_need(lateral_m: np.ndarray, radius_m: float) -> np.ndarray:
+    """How far along a road (m) before (after) where it attaches a connector is
+    ``lateral_m`` from the road, if it turns off (onto) it at ``radius_m`` up to 45° and
+    runs straight from there: along the arc while it is within ``(1 - cos 45°)`` of its
+    radius of the road, then one metre along for each metre out.
+
+    >>> [round(float(x), 1) for x in round_need(np.array([0.0, 100.0, 200.0]), 100.0)]
+    [0.0, 141.4, 241.4]
+    """
+    lat = np.asarray(lateral_m, float)
+    turn = (1.0 - math.cos(math.pi / 4)) * radius_m  # how far out the 45° arc reaches
+    arc = np.sqrt(np.clip(radius_m**2 - (radius_m - np.minimum(lat, turn)) ** 2, 0.0, None))
+    return np.where(lat < turn, arc, radius_m * math.sin(math.pi / 4) + lat - turn)

@@ -14,8 +14,9 @@ attachments) and the ramp's targets.
   later keep ``gap_m`` from earlier ones, from the whole length a stub runs
   along the road or a loop reaches along it.
 * A cloverleaf's outer connector, which goes round the loop joining the same two
-  roads, attaches where an arc of its target radius clears every point of the
-  loop. A ramp joining a road after a loop leaves it, and not coming from the
+  roads, attaches where it clears every point of the loop turning at its target
+  radius to 45° and running straight on
+  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`). A ramp joining a road after a loop leaves it, and not coming from the
   road the loop goes to (a trumpet), passes over the loop's exit branch and
   keeps room after it to descend.
 * A loop whose outer connector leaves (joins) a stub fitted before it keeps, on the

@@ -1,0 +1,77 @@
+"""Outer connectors go round their loops: where they attach (issue 18)."""
+
+import math
+
+import numpy as np
+
+from flyover.geometry.build import _fit_with_levels
+from flyover.geometry.check import ramp_crossings
+from flyover.geometry.feasibility import round_loops
+from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
+from flyover.geometry.state import LayoutState
+from flyover.topology.catalog import catalog_topologies
+
+#: the workflow's cloverleaf feature set 1 (results/features, sampling version 4)
+CLOVER_1_LANES = {"A1": 5, "A2": 3, "B1": 5, "B2": 5}
+CLOVER_1 = {"lA1": (100.0, 3.0), "lA2": (150.0, 3.0), "lB1": (150.0, 4.0), "lB2": (40.0, 4.0),
+            "oA1": (210.0, 3.0), "oA2": (60.0, 3.0), "oB1": (210.0, 4.0), "oB2": (150.0, 3.0)}
+
+
+def test_a_connector_needs_its_45_degree_run_to_get_out_from_its_road():
+    from flyover.geometry.loop_room import round_need  # noqa: PLC0415
+
+    r = 100.0
+    turn = (1 - math.cos(math.pi / 4)) * r
+    need = round_need(np.array([0.0, turn / 2, turn, 2 * r]), r)
+    # along its arc near the road, then a metre along for each metre out
+    assert need[0] == 0.0
+    assert math.isclose(need[1], math.sqrt(r**2 - (r - turn / 2) ** 2))
+    assert math.isclose(need[2], r * math.sin(math.pi / 4))
+    assert math.isclose(need[3] - need[2], 2 * r - turn)
+    # a lone arc (the old rule) would be back at the road's normal after r along: the
+    # loop's far side, 2 r out, is 2.41 r along at 45 degrees
+    assert need[3] > 2.4 * r
+
+
+def test_a_cloverleaf_connector_attaches_beyond_its_loops_far_side_at_45_degrees():
+    """Cloverleaf feature set 1: the loop lA1 (100 m) reaches ~210 m out from A1 and ~330 m
+    along it; the connector oB2 (150 m) joining A1 after it was allowed to attach where a
+    lone 150 m arc clears every point of the loop (~490 m along A1), but no connector
+    running from B2 to there passes outside the loop's far side: every fit round the loop
+    missed (2 samples inside it), and the build took it over the loop at 13 m. Now its
+    window on A1 begins where a connector turning to 45 degrees and running straight on
+    clears every loop point, and it goes round."""
+    t = catalog_topologies()["cloverleaf"]
+    st = LayoutSettings()
+    feats = {r: RampFeatures(*v) for r, v in CLOVER_1.items()}
+    b = LayoutState(t, CLOVER_1_LANES, feats, st, 4154944655)
+    order = b.order()
+    for ramp in order[: order.index("oB2")]:  # what is fitted before it (lA1 among them)
+        fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), 1)
+        b.record(ramp, fit)
+    assert "lA1" in b.fits and b.windows.loops.round_loops("oB2") == {"lA1"}
+    end = b.spec("oB2", feats["oB2"]).end  # its window on A1
+    a1 = b.roads["A1"]
+    d = np.array([math.cos(a1.heading), math.sin(a1.heading)])
+    rel = b.fitted.stations["lA1"]["centre"] - np.array(a1.origin)
+    along = rel @ d
+    out = np.clip(-(rel @ np.array([-d[1], d[0]])) - a1.lanes * st.lane_width_m, 0, None)
+    c = b.width["oB2"] + b.width["lA1"] / 2 + 1.0
+    # beyond every loop point by its distance out and the room between them, and the
+    # 45 degree arc's (sin 45 - 1 + cos 45) r = 0.41 r: ~601 m (a lone arc: ~489 m)
+    assert end.lo >= float(np.max(along + out + c)) + 0.41 * 150.0
+    start = b.spec("oB2", feats["oB2"]).start  # and before the loop's B2 side likewise
+    assert start.hi < -500.0
+
+
+def test_a_cloverleaf_connector_goes_round_a_loop_reaching_far_out():
+    """The same feature set built as the workflow builds it (its seed): oB2 went over lA1
+    (a bridge the design does not have, ``ramp_crossings``); now round it, within its
+    targets, and so does every other connector."""
+    t = catalog_topologies()["cloverleaf"]
+    feats = {r: RampFeatures(*v) for r, v in CLOVER_1.items()}
+    ic = build_interchange(t, CLOVER_1_LANES, feats, seed=4154944655)
+    crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
+    for p in round_loops(t):
+        assert frozenset((p.connector, p.loop)) not in crossed, p
+    assert all(o.fit.ok and o.fit.conflicts == 0 for o in ic.outcomes)
