@@ -1,4 +1,4 @@
-"""Outer connectors go round their loops: where they attach (issue 18)."""
+"""Outer connectors go round their loops: where they attach, and C-D roads' pairs (issue 18)."""
 
 import math
 
@@ -75,3 +75,27 @@ def test_a_cloverleaf_connector_goes_round_a_loop_reaching_far_out():
     for p in round_loops(t):
         assert frozenset((p.connector, p.loop)) not in crossed, p
     assert all(o.fit.ok and o.fit.conflicts == 0 for o in ic.outcomes)
+
+
+def test_cloverleaf_cd_connectors_go_round_the_loops_between_their_cd_roads():
+    """cloverleaf_cd's connectors and loops leave and join collector-distributor roads
+    (ramps), so no (connector, loop) pair was found: neither sampling nor the layout kept
+    its connectors wider than, or round, its loops. Through the C-D roads (each counts as
+    the carriageway it runs beside) they pair as cloverleaf's do, quadrant by quadrant
+    (oA1 from cA1 beside A1 to cB1 beside B1 round lB1 from cB1 to cA1), and each
+    connector is fitted after its loop, with the loop kept out at every height."""
+    t = catalog_topologies()["cloverleaf_cd"]
+    pairs = [(p.connector, p.loop) for p in round_loops(t)]
+    assert pairs == [("oA1", "lB1"), ("oA2", "lB2"), ("oB1", "lA2"), ("oB2", "lA1")]
+    st = LayoutSettings()
+    feats = {r: RampFeatures(math.inf, 0.0) if r.startswith("c") else
+             RampFeatures(150.0 if r.startswith("o") else 60.0, 4.0) for r in t.ramps}
+    b = LayoutState(t, {}, feats, st, 0)
+    order = b.order()
+    for connector, loop in pairs:
+        assert b.moves.is_outer_connector(connector, loop)
+        assert order.index(loop) < order.index(connector)
+    for ramp in order[: order.index("oA1")]:
+        fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), 1)
+        b.record(ramp, fit)
+    assert b.windows.loops.round_loops("oA1") == {"lB1"}

@@ -182,7 +182,9 @@ def class_tables(stage):
 #     degrees at its radius and running straight on, it clears every point of the loop (a
 #     lone arc of its radius left it inside the loop's far side: one in ten went over its
 #     loop on the workflow's sets; cloverleaf 89.4 -> 100 % round, cloverstack 87.9 -> 95.5 %,
-#     parclos 89.6 -> 100 %)
+#     parclos 89.6 -> 100 %); cloverleaf_cd's connectors and loops, between C-D roads, are
+#     pairs too (chains.Movements.through_stubs): each connector fitted after its loop and
+#     round it if it can, resampled wider than it
 GEOMETRY_VERSION = 32
 
 
