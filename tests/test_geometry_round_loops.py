@@ -99,3 +99,48 @@ def test_cloverleaf_cd_connectors_go_round_the_loops_between_their_cd_roads():
         fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), 1)
         b.record(ramp, fit)
     assert b.windows.loops.round_loops("oA1") == {"lB1"}
+
+
+def _cd_state(feats):
+    """cloverleaf_cd laid out as the build lays it out, up to (not including) oA1."""
+    from flyover.geometry.build import _collector  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverleaf_cd"]
+    b = LayoutState(t, {}, feats, LayoutSettings(), 7)
+    order = b.order()
+    for ramp in order[: order.index("oA1")]:
+        spec = b.spec(ramp, feats[ramp])
+        fit = _collector(b, ramp, spec) if b.moves.same_road(ramp) else None
+        if fit is None or not fit.ok:
+            fit, _, _ = _fit_with_levels(b, spec, 1)
+        b.record(ramp, fit)
+    return b
+
+
+def _along(b, road, xy):
+    r = b.roads[road]
+    return (np.asarray(xy) - np.array(r.origin)) @ np.array([math.cos(r.heading),
+                                                              math.sin(r.heading)])
+
+
+def test_a_loop_on_a_cd_road_keeps_near_the_crossing_and_its_connector_goes_beyond_it():
+    """A loop's window on a C-D road was 15 % of the road either side of its ``pos``: on a
+    2 km C-D road it joined cA1 up to ~500 m before the crossing and swept the quadrant,
+    and its connector, in its own 15 %, had no room outside it. Now the loop attaches
+    within ``stub_window_m`` beyond the crossing's room, as on a road, and the connector
+    where it clears it at 45 degrees (``round_loop`` along A1, as stations of cA1)."""
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(math.inf, 0.0) if r.startswith("c") else
+             RampFeatures(210.0 if r.startswith("o") else 100.0, 4.0) for r in t.ramps}
+    b = _cd_state(feats)
+    st = b.st
+    other = max(r.half_width for r in b.roads.values() if r.expressway != b.roads["A1"].expressway)
+    tz = other + st.crossing_margin_m
+    cd = b.fitted.stations["cA1"]
+    joins = b.fits["lB1"].end_s  # station of cA1 where lB1 joins it
+    t_join = float(np.interp(joins, cd["s"], _along(b, "A1", cd["xy"])))
+    assert -tz - st.stub_window_m - 1.0 <= t_join <= -tz + 1.0
+    start = b.spec("oA1", feats["oA1"]).start  # oA1 leaves cA1 before lB1 joins it
+    bound = b.windows.loops.round_loop("lB1", "A1", b.width["oA1"], -1, feats["oA1"])
+    t_hi = float(np.interp(start.hi, cd["s"], _along(b, "A1", cd["xy"])))
+    assert t_hi <= bound + 1.0

@@ -184,7 +184,9 @@ def class_tables(stage):
 #     loop on the workflow's sets; cloverleaf 89.4 -> 100 % round, cloverstack 87.9 -> 95.5 %,
 #     parclos 89.6 -> 100 %); cloverleaf_cd's connectors and loops, between C-D roads, are
 #     pairs too (chains.Movements.through_stubs): each connector fitted after its loop and
-#     round it if it can, resampled wider than it
+#     round it if it can, resampled wider than it; on a C-D road a loop attaches within
+#     stub_window_m beyond the crossing's room and its connector where it clears it (45
+#     degrees): cloverleaf_cd (regenerated sets) 51.6 -> 85.5 % round
 GEOMETRY_VERSION = 32
 
 
