@@ -85,13 +85,15 @@ def test_a_road_over_itself_is_two_levels_a_clearance_apart_where_it_crosses(tmp
     # loops against themselves (GEOMETRY_VERSION 15) it does not cross itself. Since a ramp
     # is nowhere tighter than its target (GEOMETRY_VERSION 22), feature set 1's loop is
     # fitted otherwise: built with seed 10, its outer border passed over its start again;
-    # since ramps are length-bounded, GEOMETRY_VERSION 30, with seed 1: 5.7 m apart.)
+    # since ramps are length-bounded, GEOMETRY_VERSION 30, with seed 1: 5.7 m apart; since
+    # a loop on a C-D road attaches near the crossing, GEOMETRY_VERSION 32, seed 1's and 2's
+    # no longer pass over themselves, seed 3's does: 5.48 m apart.)
     import numpy as np
 
     from flyover.clients.designs import catalog_geometry
     from flyover.opendrive.writer import xodr_bytes
     path = tmp_path / "cloverleaf_cd_1.xodr"
-    path.write_bytes(xodr_bytes(catalog_geometry("cloverleaf_cd", 1, seed=1)))
+    path.write_bytes(xodr_bytes(catalog_geometry("cloverleaf_cd", 1, seed=3)))
     net = read_xodr(path)
     roads = [r for r in net.roads.values() if r.name == "lA1" and r.junction == "-1"]
     [loop] = roads

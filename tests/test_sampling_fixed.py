@@ -192,22 +192,32 @@ def test_inf_is_forbidden_on_turning_ramps_and_the_rest_is_fully_covered(cloverl
     rows = [r for r in s.feature_rows() if r["kind"] == "ramp"]
     turning = turning_ramps(cloverleaf_cd)
     assert not [r for r in rows if r["element"] in turning and r["radius_m"] == math.inf]
-    # every other radius still occurs on every turning ramp, and the C-D roads keep inf
+    # every other radius still occurs on every turning ramp but what its loop (connector)
+    # rules out (round_loops: no loop of 280 m, no connector of 30 m), and the C-D roads
+    # keep inf
+    pairs = round_loops(cloverleaf_cd)
     for ramp in turning:
+        ruled_out = {280.0} if ramp in {p.loop for p in pairs} else \
+            {30.0} if ramp in {p.connector for p in pairs} else set()
         assert {r["radius_m"] for r in rows if r["element"] == ramp} == \
-            set(profile.domain(Kind.RAMP)[Feature.RADIUS_M]) - {math.inf}
+            set(profile.domain(Kind.RAMP)[Feature.RADIUS_M]) - {math.inf} - ruled_out
     assert any(r["element"] in CD_ROADS and r["radius_m"] == math.inf for r in rows)
     model = s.model
-    covered, total = independent_coverage(s.array.rows, model.levels, 2, cells(model.forbidden))
-    assert covered == total > 0
+    # a connector of 30 m and a loop of 280 m are in no valid row (implied)
+    covered, total = independent_coverage(s.array.rows, model.levels, 2, cells(model.forbidden),
+                                          Constraints(model.levels, model.forbidden).extendable)
+    assert covered == total == s.coverage.tuples_total > 0
 
 
-def test_a_profile_without_inf_forbids_nothing(cloverleaf_cd):
+def test_a_profile_without_inf_forbids_only_tight_connector_loop_pairs(cloverleaf_cd):
     p = default_profile()
     domains = tuple((k, tuple((f, tuple(v for v in vs if v != math.inf)) for f, vs in fs))
                     for k, fs in p.domains)
-    assert forbidden_features(cloverleaf_cd, replace(p, domains=domains)) == ()
-    assert len(forbidden_features(cloverleaf_cd, p)) == len(turning_ramps(cloverleaf_cd))
+    # only the pairs of an outer connector and its loop (round_loops) are left
+    without = forbidden_features(cloverleaf_cd, replace(p, domains=domains))
+    assert without and all(len(r.elements) == 2 for r in without)
+    assert len(forbidden_features(cloverleaf_cd, p)) == \
+        len(turning_ramps(cloverleaf_cd)) + len(without) + len(round_loops(cloverleaf_cd))
 
 
 def test_resampling_keeps_a_turning_ramp_finite():
@@ -236,6 +246,8 @@ def _pair_allowed(model, connector: str, loop: str) -> dict[tuple[float, float],
 @pytest.mark.parametrize("design, pairs", [
     ("cloverleaf", [("oA1", "lB1"), ("oA2", "lB2"), ("oB1", "lA2"), ("oB2", "lA1")]),
     ("cloverstack", [("oA1", "lB1"), ("oA2", "lB2")]),
+    # through its collector-distributor roads (each the carriageway it runs beside)
+    ("cloverleaf_cd", [("oA1", "lB1"), ("oA2", "lB2"), ("oB1", "lA2"), ("oB2", "lA1")]),
 ])
 def test_an_outer_connector_must_be_wider_than_its_loop_and_nothing_else_is_forbidden(
         design, pairs):
@@ -265,7 +277,7 @@ def test_an_outer_connector_must_be_wider_than_its_loop_and_nothing_else_is_forb
 
 def test_designs_without_loops_or_without_outer_connectors_have_no_pairs():
     topos = catalog_topologies()
-    for design in ("j1", "trumpet", "stack4", "diamond", "turbine", "cloverleaf_cd"):
+    for design in ("j1", "trumpet", "stack4", "diamond", "turbine"):
         if design in topos:
             assert round_loops(topos[design]) == (), design
 

@@ -202,9 +202,11 @@ class Movements:
     def through_stubs(self, ramp: str, forward: bool) -> str | None:
         """The road ``ramp``'s chain reaches forward (backward) through stubs alone: the
         ramp's end (start), else that of the stub it joins (leaves), and so on (Columbus's
-        loop ``r6`` comes from I-270 North through the stubs ``r13`` and ``r8``). ``None``
-        if the chain passes a ramp with both ends (a collector-distributor road, a
-        connector) or a stub with no end that way (it splits: which road is open)."""
+        loop ``r6`` comes from I-270 North through the stubs ``r13`` and ``r8``); a
+        collector-distributor road it joins (leaves) counts as the road it runs beside
+        (``cloverleaf_cd``'s ``oA1`` from ``cA1``, beside A1, to ``cB1``, beside B1).
+        ``None`` if the chain passes any other ramp with both ends (a connector) or a
+        stub with no end that way (it splits: which road is open)."""
         node, seen = ramp, {ramp}
         while True:
             nxt = ends(self.topo, node)[1 if forward else 0]
@@ -213,6 +215,8 @@ class Movements:
             node = nxt[0]
             if node in self.roads:
                 return node
+            if self.same_road(node):  # a C-D road: the carriageway it leaves and rejoins
+                return ends(self.topo, node)[0][0]
             if node in seen or not self.is_stub(node):
                 return None
             seen.add(node)
@@ -222,8 +226,9 @@ class Movements:
         two roads the loop joins the other way round, each reached directly or through
         stubs (:meth:`through_stubs`; Columbus's ``r11`` from I-70 West through the stub
         ``r1`` to I-270 North, round the loop ``r6`` from I-270 North through ``r8`` and
-        ``r13`` to I-70 West). Unlike :meth:`goes_round_loop` it needs no road both attach
-        to themselves."""
+        ``r13`` to I-70 West; ``cloverleaf_cd``'s ``oA1`` round ``lB1``, both between
+        collector-distributor roads). Unlike :meth:`goes_round_loop` it needs no road both
+        attach to themselves."""
         if ramp == loop or not self.is_loop(loop) or self.is_loop(ramp):
             return False
         a, b = self.through_stubs(ramp, False), self.through_stubs(ramp, True)

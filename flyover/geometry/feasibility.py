@@ -59,7 +59,8 @@ ramp longer than any real one: it is forbidden on that ramp too.
 
 **Outer connectors round their loops.** A cloverleaf's or parclo's outer connector and
 the loop that joins the same two roads the other way round, on the road they share or
-with their chains through stubs (Columbus's ``r11`` round ``r6``:
+with their chains through stubs (Columbus's ``r11`` round ``r6``) or collector-distributor
+roads (``cloverleaf_cd``'s ``oA1`` round ``lB1``:
 :meth:`flyover.geometry.chains.Movements.is_outer_connector`, the rule the layout
 keeps them apart by), lie in one quadrant, the connector outside: real ones are two
 nearly concentric curves, the connector's the wider. A connector sampled tighter than
@@ -79,6 +80,8 @@ cloverleaf gets them too.
 True
 >>> round_loops(catalog_topologies()["cloverstack"])[0].allows(60.0, 60.0)
 False
+>>> [(p.connector, p.loop) for p in round_loops(catalog_topologies()["cloverleaf_cd"])][:2]
+[('oA1', 'lB1'), ('oA2', 'lB2')]
 """
 
 from __future__ import annotations

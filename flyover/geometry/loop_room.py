@@ -5,7 +5,8 @@ Decides how far along a road a loop keeps from a fitted stub whose child goes ro
 it (:meth:`LoopRoom.room_round`), the fences that keep the loop's body off that
 child's turn (:meth:`LoopRoom.fences`), which fitted loops a ramp goes round
 (:meth:`LoopRoom.round_loops`) and where along their shared road a ramp must attach to
-go round one (:meth:`LoopRoom.round_loop`). Reads the road layout, the ramps' kinds
+go round one (:meth:`LoopRoom.round_loop`; on a collector-distributor road
+:meth:`LoopRoom.on_collector`). Reads the road layout, the ramps' kinds
 (:class:`flyover.geometry.chains.Movements`), the ramps fitted so far and their
 targets. The attachment windows (:mod:`flyover.geometry.rails`) and the build loop
 (:mod:`flyover.geometry.build`) use it.
@@ -22,7 +23,7 @@ from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 
-__all__ = ["LoopRoom"]
+__all__ = ["LoopRoom", "round_need"]
 
 
 class LoopRoom:
@@ -88,7 +89,14 @@ class LoopRoom:
                    feat: RampFeatures) -> float:
         """Where along ``road`` a ramp turning at its target radius must attach to go round
         the fitted ``loop``: after (``side`` +1) or before (-1) every point of it, by the
-        distance an arc of that radius needs to get as far from the road."""
+        distance a connector needs to get as far from the road (plus the room between
+        their centre lines) when it turns at its radius until it runs at 45° to the road,
+        then straight on (:func:`round_need`), as a real outer connector runs across its
+        quadrant's diagonal outside the loop (the same shape as
+        :meth:`flyover.geometry.levels.LevelPlan.round_room`). A lone arc of its radius
+        (what was required before) leaves it inside the loop's far side whenever the
+        loop reaches farther from the corner than the arc: the fit then went over the
+        loop (one in ten of the workflow's cloverleaf connectors)."""
         r, st = self.roads[road], self.st
         d = np.array([math.cos(r.heading), math.sin(r.heading)])
         rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
@@ -96,6 +104,66 @@ class LoopRoom:
         lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
         rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
         c = width + self.fitted.width[loop] / 2 + 1.0
-        need = np.where(lat + c < rad, np.sqrt(np.clip(rad**2 - (rad - lat - c) ** 2, 0, None)),
-                        rad + c)
+        need = round_need(lat + c, rad)
         return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
+
+    def on_collector(self, cd: str, ramp: str, pos: float, width: float,
+                     feat: RampFeatures, lo: float, hi: float) -> tuple[float, float]:
+        """The window ``lo..hi`` (stations) of ``ramp`` on the collector-distributor road
+        ``cd``, for a loop or an outer connector (``cloverleaf_cd``): a loop attaches
+        within ``stub_window_m`` beyond the crossing's room (the other expressway's half
+        width and ``crossing_margin_m``) on its side of the crossing, as a loop on a road
+        does (in the window ``pos`` gives, 15 % of ``cd`` either side, a loop on a 2 km
+        C-D road attached up to 500 m out and swept the quadrant); an outer connector
+        where it goes round each fitted loop on ``cd`` (:meth:`round_loop` along the
+        carriageway ``cd`` runs beside, as stations of ``cd``), else as long a window
+        beyond that, on ``cd``'s middle 90 %. Unchanged where ``cd`` leaves no room."""
+        road = ends(self.topo, cd)[0][0]
+        r, st = self.roads[road], self.st
+        stn = self.fitted.stations[cd]
+        along = np.maximum.accumulate(
+            (stn["xy"] - np.array(r.origin)) @ np.array([math.cos(r.heading),
+                                                        math.sin(r.heading)]))
+        length = float(stn["s"][-1])
+        first, last = 0.05 * length, 0.95 * length
+        if self.moves.is_loop(ramp):
+            other = max([x.half_width for x in self.roads.values()
+                         if x.expressway != r.expressway] or [0.0])
+            tz = other + st.crossing_margin_m
+            start = ends(self.topo, ramp)[0]
+            t_lo, t_hi = (tz, tz + st.stub_window_m) if start is not None and \
+                start[0] == cd else (-tz - st.stub_window_m, -tz)
+            s_lo, s_hi = (float(np.interp(t, along, stn["s"])) for t in (t_lo, t_hi))
+            s_lo, s_hi = max(s_lo, first), min(s_hi, last)
+            return (s_lo, s_hi) if s_hi - s_lo >= 1.0 else (lo, hi)
+        new_lo, new_hi = lo, hi
+        for p, _, _, other, _ in self.fitted.attached.get(cd, []):
+            if p == pos or not self.moves.is_outer_connector(ramp, other):
+                continue
+            side = 1 if p < pos else -1
+            t = self.round_loop(other, road, width, side, feat)
+            s = float(np.interp(t, along, stn["s"]))
+            new_lo, new_hi = (max(new_lo, s), new_hi) if side > 0 else (new_lo, min(new_hi, s))
+        if new_hi - new_lo >= 1.0:
+            return new_lo, new_hi
+        span = hi - lo
+        if lo < new_lo < last - 1.0:  # beyond its window: as long a window beyond the bound
+            return new_lo, min(last, new_lo + span)
+        if first + 1.0 < new_hi < hi:
+            return max(first, new_hi - span), new_hi
+        return lo, hi
+
+
+def round_need(lateral_m: np.ndarray, radius_m: float) -> np.ndarray:
+    """How far along a road (m) before (after) where it attaches a connector is
+    ``lateral_m`` from the road, if it turns off (onto) it at ``radius_m`` up to 45° and
+    runs straight from there: along the arc while it is within ``(1 - cos 45°)`` of its
+    radius of the road, then one metre along for each metre out.
+
+    >>> [round(float(x), 1) for x in round_need(np.array([0.0, 100.0, 200.0]), 100.0)]
+    [0.0, 141.4, 241.4]
+    """
+    lat = np.asarray(lateral_m, float)
+    turn = (1.0 - math.cos(math.pi / 4)) * radius_m  # how far out the 45° arc reaches
+    arc = np.sqrt(np.clip(radius_m**2 - (radius_m - np.minimum(lat, turn)) ** 2, 0.0, None))
+    return np.where(lat < turn, arc, radius_m * math.sin(math.pi / 4) + lat - turn)

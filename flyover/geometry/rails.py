@@ -14,8 +14,12 @@ attachments) and the ramp's targets.
   later keep ``gap_m`` from earlier ones, from the whole length a stub runs
   along the road or a loop reaches along it.
 * A cloverleaf's outer connector, which goes round the loop joining the same two
-  roads, attaches where an arc of its target radius clears every point of the
-  loop. A ramp joining a road after a loop leaves it, and not coming from the
+  roads, attaches where it clears every point of the loop turning at its target
+  radius to 45° and running straight on
+  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`). On a collector-distributor
+  road a loop attaches near the crossing, as on a road, and its outer connector where
+  that rule clears the loop along the carriageway
+  (:meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). A ramp joining a road after a loop leaves it, and not coming from the
   road the loop goes to (a trumpet), passes over the loop's exit branch and
   keeps room after it to descend.
 * A loop whose outer connector leaves (joins) a stub fitted before it keeps, on the
@@ -92,7 +96,7 @@ class AttachmentWindows:
             return self.road_rail(node, ramp, feat, label, is_start, loop, pos, width, extra,
                                   bound)
         return self.ramp_rail(node, ramp, label, is_start, width, level,
-                              feat.slope_pct / 100.0 + GENTLE_MARGIN)
+                              feat.slope_pct / 100.0 + GENTLE_MARGIN, feat)
 
     def road_rail(self, road: str, ramp: str, feat: RampFeatures, label: Label,
                   is_start: bool, loop: bool, pos: float | None, width: float,
@@ -161,7 +165,8 @@ class AttachmentWindows:
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
 
     def ramp_rail(self, parent: str, ramp: str, label: Label, is_start: bool,
-                  width: float, level: bool = True, gentle: float | None = None) -> Rail:
+                  width: float, level: bool = True, gentle: float | None = None,
+                  feat: RampFeatures | None = None) -> Rail:
         st = self.fitted.stations[parent]
         length = st["s"][-1]
         pw = self.fitted.width[parent]
@@ -194,6 +199,10 @@ class AttachmentWindows:
                         hi = min(hi, t_other - gap)
                 if lo > hi - 1.0:
                     lo, hi = wlo, whi
+                if feat is not None and self.moves.same_road(parent):
+                    # on a C-D road a loop keeps near the crossing, and its outer connector
+                    # goes round it, as on a road
+                    lo, hi = self.loops.on_collector(parent, ramp, pos, width, feat, lo, hi)
             elif self.moves.is_loop(parent):  # leave a loop before it turns, join it after
                 head = st["heading"]
                 if is_start:
