@@ -60,6 +60,7 @@ from flyover.geometry.beside import child_room_fences
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
+from flyover.geometry.guess import can_guess, dubins_guess
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
@@ -137,15 +138,24 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
+    # same targets, other shapes and seeds; the last, for a ramp between two windows, started
+    # from the Dubins path between them (:func:`dubins_guess`)
     restarts += [spec] * st.restarts
-    for k, again in enumerate(restarts[:st.restarts]):  # same targets, other shapes/seeds
+    restarts = restarts[:st.restarts]
+    guess = bool(restarts) and can_guess(spec)
+    for k, again in enumerate(restarts):
         if best.ok or _systematic(best):
             break
+        init = None
+        if guess and k == len(restarts) - 1 and (
+                found := dubins_guess(replace(spec, z_crest=best.spec.z_crest))) is not None:
+            again, init = replace(spec, pieces=found.pieces), found.x[None]
         fit = fit_ramp(replace(again, z_crest=best.spec.z_crest), obst, st.fit,
-                       seed=seed + 104_729 * (k + 1))
+                       seed=seed + 104_729 * (k + 1), init=init)
         evals += fit.evaluations
         secs += fit.seconds
-        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok,
+                                               not f.radius_ok))
     return best, evals, secs
 
 
