@@ -81,10 +81,10 @@ def test_no_guess_for_a_stub_or_an_inf_target():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("sample, lanes, targets", [
-    (8, {"A1": 5, "A2": 3, "B1": 5, "B2": 3},
-     {"eA1": (math.inf, 5), "eA2": (280, 3), "eB1": (210, 1), "eB2": (150, 4),
-      "lA1": (100, 4), "lA2": (60, 1), "lB1": (40, 1), "lB2": (30, 1),
-      "rA1": (280, 2), "rA2": (280, 1), "rB1": (100, 2), "rB2": (40, 3)}),
+    (15, {"A1": 4, "A2": 5, "B1": 5, "B2": 5},
+     {"eA1": (30, 2), "eA2": (40, 5), "eB1": (60, 3), "eB2": (100, 5),
+      "lA1": (30, 5), "lA2": (210, 4), "lB1": (280, 2), "lB2": (100, 1),
+      "rA1": (280, 4), "rA2": (40, 3), "rB1": (100, 5), "rB2": (40, 2)}),
     (38, {"A1": 5, "A2": 4, "B1": 3, "B2": 5},
      {"eA1": (40, 3), "eA2": (210, 2), "eB1": (150, 2), "eB2": (30, 1),
       "lA1": (280, 4), "lA2": (60, 1), "lB1": (100, 1), "lB2": (30, 4),
@@ -92,10 +92,11 @@ def test_no_guess_for_a_stub_or_an_inf_target():
 ])
 def test_a_turbine_right_turn_merging_far_out_meets_its_radius_at_the_first_try(
         sample, lanes, targets):
-    """Catalog turbine feature sets (the workflow's t=2 array): rB2 merges onto A1 beyond
-    lB1 (2 km out, at 30–40 m), one Bézier piece through its turn and its 2 km run. Every
-    restart from random chains missed its radius (43.2 m for 40 m; 26 m at a point for
-    30 m); the last one, from its Dubins path (three pieces), meets it."""
+    """Catalog turbine feature sets (the workflow's t=2 array, samples 15 and 38): rB2
+    merges onto A1 beyond lB1 (1.2–2.1 km out), one Bézier piece through its turn at
+    30–40 m and that run. Every restart from random chains missed its radius (28.5 m at a
+    point for 40 m; 33.2 m for 30 m); the last one, from its Dubins path (three pieces),
+    meets it."""
     t = catalog_topologies()["turbine"]
     cid = class_id(t)
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}
@@ -104,4 +105,4 @@ def test_a_turbine_right_turn_merging_far_out_meets_its_radius_at_the_first_try(
                            settings=LayoutSettings(max_length_ratio=2.5))
     out = {o.ramp: o for o in ic.outcomes}
     assert out["rB2"].first_try_ok, out["rB2"].infeasible
-    assert out["rB2"].fit.length_m > 2000.0
+    assert out["rB2"].fit.length_m > 1000.0
