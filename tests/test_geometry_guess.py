@@ -95,8 +95,10 @@ def test_a_turbine_right_turn_merging_far_out_meets_its_radius_at_the_first_try(
     """Catalog turbine feature sets (the workflow's t=2 array, samples 15 and 38): rB2
     merges onto A1 beyond lB1 (1.2–2.1 km out), one Bézier piece through its turn at
     30–40 m and that run. Every restart from random chains missed its radius (28.5 m at a
-    point for 40 m; 33.2 m for 30 m); the last one, from its Dubins path (three pieces),
-    meets it."""
+    point for 40 m; 33.2 m for 30 m). In 15 the last restart, from its Dubins path (three
+    pieces), meets it; in 38 it grazes lB1 as every restart did but holds its radius, is
+    kept for that (:func:`flyover.geometry.build._restart_rank`), and rip-up and reroute
+    clears the graze. (Without the guess 15 misses, with the old rank 38 does.)"""
     t = catalog_topologies()["turbine"]
     cid = class_id(t)
     feats = {r: RampFeatures(float(a), float(b)) for r, (a, b) in targets.items()}

@@ -498,17 +498,19 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
     seen = []
     real = build.fit_ramp
 
-    def spy(spec, obstacles, settings, seed=0):
+    def spy(spec, obstacles, settings, seed=0, init=None):
         if spec.id == "oA1":
-            seen.append((spec.pieces, any(spec.leads()), seed))
-        return real(spec, obstacles, settings, seed=seed)
+            seen.append((spec.pieces, any(spec.leads()), init is not None, seed))
+        return real(spec, obstacles, settings, seed=seed, init=init)
 
     monkeypatch.setattr(build, "fit_ramp", spy)
     build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
                       settings=LayoutSettings(restarts=4, max_resamples=0))
     n = seen[0][0]
-    assert [(p, lead) for p, lead, _ in seen] == [(n, False), (n, True), (n + 1, True),
-                                                  (n + 1, False), (n, False)]
+    # the last restart starts from the Dubins path between its windows (its own pieces)
+    assert [(p, lead, init) for p, lead, init, _ in seen[:4]] == [
+        (n, False, False), (n, True, False), (n + 1, True, False), (n + 1, False, False)]
+    assert len(seen) == 5 and seen[4][1:3] == (False, True)
     assert len({s for *_, s in seen}) == 5  # each with its own seed
 
 

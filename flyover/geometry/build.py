@@ -154,9 +154,16 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
                        seed=seed + 104_729 * (k + 1), init=init)
         evals += fit.evaluations
         secs += fit.seconds
-        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok,
-                                               not f.radius_ok))
+        best = min([best, fit], key=_restart_rank)
     return best, evals, secs
+
+
+def _restart_rank(fit: RampFit) -> tuple[bool, int, bool, bool]:
+    """Which of two fits of one ramp's restarts is kept (the lower): one meeting its targets,
+    else the one with fewer conflicting samples, then within its slope, then within its
+    radius (a miss from the Dubins path that grazes what the one before it grazed too, but
+    holds its radius, is kept: rip-up and reroute can clear the graze)."""
+    return (not fit.ok, fit.conflicts, not fit.slope_ok, not fit.radius_ok)
 
 
 def build_interchange(topology: Topology, lanes: Mapping[str, int],
