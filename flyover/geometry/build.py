@@ -29,7 +29,9 @@ and the ramps already fitted:
    that climbs may first run along its parent's heading, as long as the climb
    from that end takes: up beside its road before it turns over the other
    carriageway), then also with one more Bézier piece, then with one more
-   piece but no leads, then with other seeds (``restarts`` fits in all); a
+   piece but no leads, then with other seeds (``restarts`` fits in all; the last,
+   for a ramp between two windows, from the shortest Dubins path between them at
+   its radius target, :mod:`flyover.geometry.guess`); a
    ramp attached to a ramp is first held to where its parent is level
    (:meth:`flyover.geometry.rails.AttachmentWindows.level_part`; else where its
    parent is no steeper than its slope target) and, if it misses its targets
@@ -111,7 +113,11 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
     again (``restarts`` times in all) with its straight leads
     (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
     cubic cannot bend evenly enough for its radius), then with one more piece
-    but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
+    but no leads, then with other seeds, the last of them (a ramp between two windows,
+    :func:`can_guess`) started from the Dubins path between its windows
+    (:func:`dubins_guess`: as many pieces as the path has arcs and straights; a right turn
+    that must run on 2 km beyond its 90° at 40 m is not one cubic); of two that miss,
+    :func:`_restart_rank` keeps one. ``keep_out``: fitted ramps it must not cross
     in plan at all, ``fences``: bands it must not enter at any height, ``approaches``:
     where ramps fitted later climb from their fixed ends
     (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`); ``lift`` False: at its

@@ -12,8 +12,9 @@ Bézier chains finds such a shape only now and then (its radius comes out 5–25
 or tighter at a point); started from the Dubins path cut into pieces at its arcs'
 ends (:func:`path_pieces`, each piece the cubic nearest that part of the path), it
 starts next to it. :func:`dubins_guess` gives that decision vector, and the number of
-pieces the path needs; the build loop fits a ramp that misses its targets so
-(:func:`flyover.geometry.build._fit_with_levels`).
+pieces the path needs; the last restart of a ramp that misses its targets starts from it
+(:func:`flyover.geometry.build._fit_with_levels`: one member of the first population; the
+others are random as before, so obstacles the path runs into are still avoided).
 
 Stubs (a free end) and ``inf`` targets get no guess (``None``).
 """
@@ -78,6 +79,7 @@ def _reference_radius(spec: RampSpec, left: bool) -> float:
 
 
 def _main_turn_left(word: Word) -> bool:
+    """Whether the longest arc of the path turns left."""
     arcs = [(s, c) for c, s in zip(word.word, word.lengths) if c != "S"]
     return max(arcs)[1] == "L" if arcs else True
 
