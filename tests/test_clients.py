@@ -87,7 +87,7 @@ def test_a_road_over_itself_is_two_levels_a_clearance_apart_where_it_crosses(tmp
     # is nowhere tighter than its target (GEOMETRY_VERSION 22), feature set 1's loop is
     # fitted otherwise: built with seed 10, its outer border passed over its start again;
     # since ramps are length-bounded, GEOMETRY_VERSION 30, with seed 1: 5.7 m apart. Since
-    # GEOMETRY_VERSION 32 a ramp's last restart starts from its Dubins path and the restarts
+    # GEOMETRY_VERSION 33 a ramp's last restart starts from its Dubins path and the restarts
     # keep one within its radius: the build is pinned to the restarts it was found with.)
     import numpy as np
 

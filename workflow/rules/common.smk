@@ -178,11 +178,12 @@ def class_tables(stage):
 # 31: a build the dense check (same_level_conflicts, as validation's clearance check) finds
 #     a ramp at another's level in is built again with other seeds, as one whose fits count a
 #     conflict (turbine workflow sample 6 at 30: lB1 1.3 m above B1 where it leaves eB1)
-# 32: the last restart of a ramp between two windows starts from the shortest Dubins path
+# 33: the last restart of a ramp between two windows starts from the shortest Dubins path
 #     between them at its radius target, cut into Bézier pieces at its arcs' ends
 #     (flyover.geometry.guess), and of two missing restarts the one within its radius is kept
-#     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912)
-GEOMETRY_VERSION = 32
+#     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912;
+#     33, not 32: main's 32 is issue33round's, merged after this branch left 0af5f78)
+GEOMETRY_VERSION = 33
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
