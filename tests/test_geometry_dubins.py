@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from flyover.geometry.dubins import shortest
+from flyover.geometry.dubins import shortest, words
 
 
 def _drive(p0, h0, r, word, lengths):
@@ -68,3 +68,23 @@ def test_broadcasts_over_windows():
     assert got.shape == (5, 2)
     one = float(shortest(pa[3], 0.0, pb[1], 0.0, 50.0))
     assert got[3, 1] == pytest.approx(one)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_words_drive_to_the_end_pose_and_the_first_is_the_shortest(seed):
+    """Every word :func:`words` gives, driven from the start pose, ends at the end pose;
+    the first is as long as :func:`shortest`."""
+    rng = np.random.default_rng(seed)
+    for _ in range(20):
+        p0, p1 = rng.uniform(-80, 80, 2), rng.uniform(-80, 80, 2)
+        h0, h1 = rng.uniform(-3, 3, 2)
+        r = float(rng.uniform(5, 40))
+        ws = words(p0, h0, p1, h1, r)
+        assert ws and ws[0].length == pytest.approx(float(shortest(p0, h0, p1, h1, r)))
+        for w in ws:
+            p, h = _drive(p0, h0, r, w.word, w.lengths)
+            assert np.hypot(*(p - p1)) < 1e-6 * max(1.0, w.length)
+            assert abs(math.remainder(h - h1, 2 * math.pi)) < 1e-6
+            assert h - h0 == pytest.approx(w.turn)
+            x, y, hh = w.poses(p0[0], p0[1], h0, np.array([w.length]))[0]
+            assert np.hypot(x - p1[0], y - p1[1]) < 1e-6 * max(1.0, w.length)

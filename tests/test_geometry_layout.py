@@ -498,17 +498,19 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
     seen = []
     real = build.fit_ramp
 
-    def spy(spec, obstacles, settings, seed=0):
+    def spy(spec, obstacles, settings, seed=0, init=None):
         if spec.id == "oA1":
-            seen.append((spec.pieces, any(spec.leads()), seed))
-        return real(spec, obstacles, settings, seed=seed)
+            seen.append((spec.pieces, any(spec.leads()), init is not None, seed))
+        return real(spec, obstacles, settings, seed=seed, init=init)
 
     monkeypatch.setattr(build, "fit_ramp", spy)
     build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
                       settings=LayoutSettings(restarts=4, max_resamples=0))
     n = seen[0][0]
-    assert [(p, lead) for p, lead, _ in seen] == [(n, False), (n, True), (n + 1, True),
-                                                  (n + 1, False), (n, False)]
+    # the last restart starts from the Dubins path between its windows (its own pieces)
+    assert [(p, lead, init) for p, lead, init, _ in seen[:4]] == [
+        (n, False, False), (n, True, False), (n + 1, True, False), (n + 1, False, False)]
+    assert len(seen) == 5 and seen[4][1:3] == (False, True)
     assert len({s for *_, s in seen}) == 5  # each with its own seed
 
 
@@ -551,12 +553,26 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
 
 
 @pytest.mark.slow
-def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds():
+def _restarts_before_the_dubins_guess(monkeypatch) -> None:
+    """Pin a seed scenario to the restarts it was found with (GEOMETRY 31): no restart from
+    the Dubins path (:mod:`flyover.geometry.guess`), and of two misses the first with as
+    few conflicts and within its slope kept, whatever their radius."""
+    from flyover.geometry import build  # noqa: PLC0415
+
+    monkeypatch.setattr(build, "can_guess", lambda spec: False)
+    monkeypatch.setattr(build, "_restart_rank", lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+
+
+def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_seeds(monkeypatch):
     """A catalog turbine feature set (sample 57 of the workflow's t=2 array, lA2 at 280 m
     since inf is no radius of a turning ramp), with one restart and one resample: in the
     first build lA2 still meets something at its level; a rebuild with other seeds clears
-    it, and the result says so (its seed, first-try failure and all the effort)."""
+    it, and the result says so (its seed, first-try failure and all the effort). (With one
+    restart, that restart is the Dubins one, which clears lA2 in the first build: pinned to
+    the restarts the scenario was found with.)"""
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
+
+    _restarts_before_the_dubins_guess(monkeypatch)
 
     t = catalog_topologies()["turbine"]
     lanes = {"A1": 3, "A2": 3, "B1": 4, "B2": 4}
@@ -659,8 +675,11 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
     jumps = _grade_jumps(ic.geometry)
     assert len(jumps) == 2 and max(jumps) <= 0.5
     # without the rule (nor the fence keeping r3 off R4 outside its window, with which r2
-    # finds room where r3 is level anyway), the same build joins r3 on its grade
+    # finds room where r3 is level anyway), the same build joins r3 on its grade (with the
+    # restarts it was found with: the Dubins restart joins it where r3 is at 2.2 %)
     from flyover.geometry import build  # noqa: PLC0415
+
+    _restarts_before_the_dubins_guess(monkeypatch)
 
     monkeypatch.setattr(rails.AttachmentWindows, "level_part",
                         lambda self, parent, lo, hi, limit=None: (lo, hi))

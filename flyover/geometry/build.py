@@ -29,7 +29,9 @@ and the ramps already fitted:
    that climbs may first run along its parent's heading, as long as the climb
    from that end takes: up beside its road before it turns over the other
    carriageway), then also with one more Bézier piece, then with one more
-   piece but no leads, then with other seeds (``restarts`` fits in all); a
+   piece but no leads, then with other seeds (``restarts`` fits in all; the last,
+   for a ramp between two windows, from the shortest Dubins path between them at
+   its radius target, :mod:`flyover.geometry.guess`); a
    ramp attached to a ramp is first held to where its parent is level
    (:meth:`flyover.geometry.rails.AttachmentWindows.level_part`; else where its
    parent is no steeper than its slope target) and, if it misses its targets
@@ -60,6 +62,7 @@ from flyover.geometry.beside import child_room_fences
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
+from flyover.geometry.guess import can_guess, dubins_guess
 from flyover.geometry.model import InterchangeGeometry
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
@@ -110,7 +113,11 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
     again (``restarts`` times in all) with its straight leads
     (:meth:`flyover.geometry.specs.RampSpecs._leads`), then also with one more Bézier piece (a turn one
     cubic cannot bend evenly enough for its radius), then with one more piece
-    but no leads, then with other seeds. ``keep_out``: fitted ramps it must not cross
+    but no leads, then with other seeds, the last of them (a ramp between two windows,
+    :func:`can_guess`) started from the Dubins path between its windows
+    (:func:`dubins_guess`: as many pieces as the path has arcs and straights; a right turn
+    that must run on 2 km beyond its 90° at 40 m is not one cubic); of two that miss,
+    :func:`_restart_rank` keeps one. ``keep_out``: fitted ramps it must not cross
     in plan at all, ``fences``: bands it must not enter at any height, ``approaches``:
     where ramps fitted later climb from their fixed ends
     (:meth:`flyover.geometry.fitted.FittedRamps.obstacles`); ``lift`` False: at its
@@ -137,16 +144,32 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
             break  # lifting does not help: the conflict is not a crossing
         spec = replace(spec, z_crest=higher[0])
     best = min(tried, key=lambda f: (f.conflicts, not f.ok, not f.slope_ok))
+    # same targets, other shapes and seeds; the last, for a ramp between two windows, started
+    # from the Dubins path between them (:func:`dubins_guess`)
     restarts += [spec] * st.restarts
-    for k, again in enumerate(restarts[:st.restarts]):  # same targets, other shapes/seeds
+    restarts = restarts[:st.restarts]
+    guess = bool(restarts) and can_guess(spec)
+    for k, again in enumerate(restarts):
         if best.ok or _systematic(best):
             break
+        init = None
+        if guess and k == len(restarts) - 1 and (
+                found := dubins_guess(replace(spec, z_crest=best.spec.z_crest))) is not None:
+            again, init = replace(spec, pieces=found.pieces), found.x[None]
         fit = fit_ramp(replace(again, z_crest=best.spec.z_crest), obst, st.fit,
-                       seed=seed + 104_729 * (k + 1))
+                       seed=seed + 104_729 * (k + 1), init=init)
         evals += fit.evaluations
         secs += fit.seconds
-        best = min([best, fit], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+        best = min([best, fit], key=_restart_rank)
     return best, evals, secs
+
+
+def _restart_rank(fit: RampFit) -> tuple[bool, int, bool, bool]:
+    """Which of two fits of one ramp's restarts is kept (the lower): one meeting its targets,
+    else the one with fewer conflicting samples, then within its slope, then within its
+    radius (a miss from the Dubins path that grazes what the one before it grazed too, but
+    holds its radius, is kept: rip-up and reroute can clear the graze)."""
+    return (not fit.ok, fit.conflicts, not fit.slope_ok, not fit.radius_ok)
 
 
 def build_interchange(topology: Topology, lanes: Mapping[str, int],

@@ -17,9 +17,11 @@ its attachment windows is a lower bound of its length
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["shortest"]
+__all__ = ["shortest", "Word", "words"]
 
 _TWO_PI = 2.0 * np.pi
 
@@ -75,3 +77,94 @@ def shortest(p0: np.ndarray, h0, p1: np.ndarray, h1, r: float) -> np.ndarray:
         t = _mod(-a - np.arctan2(ca - cb, d + sa - sb) + pp / 2.0)
         best = _take(best, np.abs(c) <= 1 + 1e-9, t + pp + _mod(b - a - t + pp))
     return best * r
+
+
+@dataclass(frozen=True)
+class Word:
+    """One Dubins path: its word (``"LSR"``…) and the length (m) of each of its three
+    segments, from a start pose at radius ``r``."""
+
+    word: str
+    lengths: tuple[float, float, float]
+    r: float
+
+    @property
+    def length(self) -> float:
+        return float(sum(self.lengths))
+
+    @property
+    def turn(self) -> float:
+        """The heading change (rad) along the path (left positive)."""
+        sign = {"L": 1.0, "R": -1.0, "S": 0.0}
+        return float(sum(sign[c] * s / self.r for c, s in zip(self.word, self.lengths)))
+
+    def poses(self, x: float, y: float, h: float, at: np.ndarray) -> np.ndarray:
+        """Poses ``(N, 3)`` (x, y, heading, unwrapped) at arc lengths ``at`` along the path
+        from ``(x, y, h)``."""
+        out = np.empty((len(at), 3))
+        ends = np.cumsum(self.lengths)
+        for i, s in enumerate(np.asarray(at, float)):
+            px, py, ph, done = x, y, h, 0.0
+            for c, seg, end in zip(self.word, self.lengths, ends):
+                ds = min(max(s - done, 0.0), seg)
+                if c == "S":
+                    px, py = px + ds * np.cos(ph), py + ds * np.sin(ph)
+                else:
+                    k = 1.0 if c == "L" else -1.0
+                    nh = ph + k * ds / self.r
+                    px += k * self.r * (np.sin(nh) - np.sin(ph))
+                    py -= k * self.r * (np.cos(nh) - np.cos(ph))
+                    ph = nh
+                done = end
+                if s <= end:
+                    break
+            out[i] = px, py, ph
+        return out
+
+
+def words(p0, h0: float, p1, h1: float, r: float) -> list[Word]:
+    """Every Dubins word that exists from ``p0`` heading ``h0`` to ``p1`` heading ``h1`` at
+    radius ``r`` (scalars; the six of :func:`shortest`, those without a solution left out),
+    shortest first.
+
+    >>> ws = words(np.zeros(2), 0.0, np.array([100.0, 20.0]), 0.0, 10.0)
+    >>> [(w.word, round(w.length, 1), round(w.turn, 2)) for w in ws[:2]]
+    [('LSR', 102.0, 0.0), ('RSR', 164.8, -6.28)]
+    """
+    dx, dy = float(p1[0] - p0[0]), float(p1[1] - p0[1])
+    d = np.hypot(dx, dy) / r
+    theta = np.arctan2(dy, dx)
+    a, b = float(_mod(h0 - theta)), float(_mod(h1 - theta))
+    sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
+    cab = np.cos(a - b)
+    out = []
+    p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
+    if p2 >= -1e-9:
+        k = np.arctan2(cb - ca, d + sa - sb)
+        out.append(("LSL", _mod(k - a), np.sqrt(max(p2, 0.0)), _mod(b - k)))
+    p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
+    if p2 >= -1e-9:
+        k = np.arctan2(ca - cb, d - sa + sb)
+        out.append(("RSR", _mod(a - k), np.sqrt(max(p2, 0.0)), _mod(k - b)))
+    p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
+    if p2 >= -1e-9:
+        pp = np.sqrt(max(p2, 0.0))
+        k = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, pp)
+        out.append(("LSR", _mod(k - a), pp, _mod(k - b)))
+    p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
+    if p2 >= -1e-9:
+        pp = np.sqrt(max(p2, 0.0))
+        k = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, pp)
+        out.append(("RSL", _mod(a - k), pp, _mod(b - k)))
+    c = (6.0 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8.0
+    if abs(c) <= 1 + 1e-9:
+        pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
+        t = _mod(a - np.arctan2(ca - cb, d - sa + sb) + pp / 2.0)
+        out.append(("RLR", t, pp, _mod(a - b - t + pp)))
+    c = (6.0 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8.0
+    if abs(c) <= 1 + 1e-9:
+        pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
+        t = _mod(-a - np.arctan2(ca - cb, d + sa - sb) + pp / 2.0)
+        out.append(("LRL", t, pp, _mod(b - a - t + pp)))
+    ws = [Word(w, (float(t) * r, float(p) * r, float(q) * r), float(r)) for w, t, p, q in out]
+    return sorted(ws, key=lambda w: w.length)

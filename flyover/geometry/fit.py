@@ -514,7 +514,8 @@ def evolve(f, bounds_: list[tuple[float, float]], popsize: int, maxiter: int, se
 
 
 def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
-             settings: FitSettings | None = None, seed: int = 0) -> RampFit:
+             settings: FitSettings | None = None, seed: int = 0,
+             init: np.ndarray | None = None) -> RampFit:
     """Fit one ramp by differential evolution and measure the result.
 
     Parameters
@@ -527,6 +528,9 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
         DE settings and tolerances.
     seed
         Seed of the search (same seed → same curve).
+    init
+        Decision vectors ``(k, D)`` the search starts from besides its random ones
+        (e.g. :func:`flyover.geometry.guess.dubins_guess`; the ``jade`` engine only).
     """
     import time  # noqa: PLC0415
 
@@ -595,7 +599,8 @@ def fit_ramp(spec: RampSpec, obstacles: Obstacles | None = None,
 
     t0 = time.perf_counter()
     if settings.engine == "jade":
-        x_best = evolve(counted, b, settings.popsize, settings.maxiter, seed, stop).x
+        x_best = evolve(counted, b, settings.popsize, settings.maxiter, seed, stop,
+                        init).x
     elif settings.vectorized:
         x_best = differential_evolution(
             counted, b, popsize=settings.popsize, maxiter=settings.maxiter, seed=seed, tol=1e-8,

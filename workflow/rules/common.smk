@@ -187,7 +187,12 @@ def class_tables(stage):
 #     round it if it can, resampled wider than it; on a C-D road a loop attaches within
 #     stub_window_m beyond the crossing's room and its connector where it clears it (45
 #     degrees): cloverleaf_cd (regenerated sets) 51.6 -> 85.5 % round
-GEOMETRY_VERSION = 32
+# 33: the last restart of a ramp between two windows starts from the shortest Dubins path
+#     between them at its radius target, cut into Bézier pieces at its arcs' ends
+#     (flyover.geometry.guess), and of two missing restarts the one within its radius is kept
+#     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912;
+#     33, not 32: main's 32 is issue33round's, merged after this branch left 0af5f78)
+GEOMETRY_VERSION = 33
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
