@@ -318,11 +318,15 @@ class _Network:
                        f"way {wid_road}: snapped", logging.WARNING)
 
     # -- 5. stretches -----------------------------------------------------
-    def _turns_back(self, a: int, n: int, b: int) -> bool:
-        """Whether a road turns by more than :data:`_TURN_BACK_DEG` at node ``n`` (from
-        ``a`` to ``b``): no carriageway does; two carriageways of a road that ends at grade,
-        drawn end to start at one node (DC's US 50 stub at 23rd Street), do."""
-        pa, pn, pb = self.xy[a], self.xy[n], self.xy[b]
+    def _turns_back(self, n: int) -> bool:
+        """Whether node ``n`` has one road segment in and one out and the road turns there by
+        more than :data:`_TURN_BACK_DEG`: no carriageway does; two carriageways of a road that
+        ends at grade, drawn end to start at one node (DC's US 50 stub at 23rd Street), do."""
+        p, s = self.pred.get(n), self.succ.get(n)
+        if not p or not s or len(p) != 1 or len(s) != 1 \
+                or not self.cls[self.seg[(p[0], n)]] == ROAD == self.cls[self.seg[(n, s[0])]]:
+            return False
+        pa, pn, pb = self.xy[p[0]], self.xy[n], self.xy[s[0]]
         u, v = _unit(pn - pa), _unit(pb - pn)
         return float(np.dot(u, v)) < math.cos(math.radians(_TURN_BACK_DEG))
 
@@ -334,7 +338,7 @@ class _Network:
             p, s = pred.get(n), succ.get(n)
             if not p or not s or len(p) != 1 or len(s) != 1 or wcls[seg[(p[0], n)]] != wcls[seg[(n, s[0])]]:
                 breaks.add(n)
-            elif wcls[seg[(p[0], n)]] == ROAD and self._turns_back(p[0], n, s[0]):
+            elif self._turns_back(n):
                 breaks.add(n)  # one carriageway ends where the other begins (_group_roads)
         starts = sorted(n for n in breaks if succ.get(n))
         limit = len(seg) + 1
@@ -458,9 +462,7 @@ class _Network:
         (at ordinary roads or the extract's edge), not into links. For the self-check."""
         self.dead_in = {n for n, s in self.succ.items() if s and not self.pred.get(n)}
         self.dead_out = {n for n, p in self.pred.items() if p and not self.succ.get(n)}
-        back = {n for n, p in self.pred.items() if len(p) == 1 and len(self.succ.get(n, ())) == 1
-                and self.cls[self.seg[(p[0], n)]] == ROAD == self.cls[self.seg[(n, self.succ[n][0])]]
-                and self._turns_back(p[0], n, self.succ[n][0])}
+        back = {n for n in self.pred if self._turns_back(n)}
         self.dead_in |= back  # one carriageway ends there, the other begins (build_stretches)
         self.dead_out |= back
 
