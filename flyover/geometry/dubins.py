@@ -34,10 +34,11 @@ def _take(best: np.ndarray, valid: np.ndarray, length: np.ndarray) -> np.ndarray
     return np.fmin(best, np.where(valid, length, np.inf))
 
 
-def shortest(p0: np.ndarray, h0, p1: np.ndarray, h1, r: float) -> np.ndarray:
-    """Length of the shortest path of curvature at most ``1 / r`` from ``p0`` (``(..., 2)``)
-    heading ``h0`` to ``p1`` heading ``h1`` (broadcast); ``inf`` where no word exists
-    (never for all six together)."""
+def _segments(p0, h0, p1, h1, r: float) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray,
+                                                    np.ndarray]]:
+    """The six Dubins words from ``p0`` heading ``h0`` to ``p1`` heading ``h1`` at radius
+    ``r`` (broadcast): ``(word, exists, t, p, q)``, the three segments' lengths in units
+    of ``r`` (meaningless where the word does not exist)."""
     p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
     dx, dy = p1[..., 0] - p0[..., 0], p1[..., 1] - p0[..., 1]
     d = np.hypot(dx, dy) / r
@@ -46,36 +47,41 @@ def shortest(p0: np.ndarray, h0, p1: np.ndarray, h1, r: float) -> np.ndarray:
     b = _mod(np.asarray(h1, float) - theta)
     sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
     cab = np.cos(a - b)
-    best = np.full(np.broadcast(d, a, b).shape, np.inf)
+    out = []
     with np.errstate(invalid="ignore"):
-        # LSL
         p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
         k = np.arctan2(cb - ca, d + sa - sb)
-        best = _take(best, p2 >= -1e-9, _mod(k - a) + np.sqrt(np.maximum(p2, 0)) + _mod(b - k))
-        # RSR
+        out.append(("LSL", p2 >= -1e-9, _mod(k - a), np.sqrt(np.maximum(p2, 0)), _mod(b - k)))
         p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
         k = np.arctan2(ca - cb, d - sa + sb)
-        best = _take(best, p2 >= -1e-9, _mod(a - k) + np.sqrt(np.maximum(p2, 0)) + _mod(k - b))
-        # LSR
+        out.append(("RSR", p2 >= -1e-9, _mod(a - k), np.sqrt(np.maximum(p2, 0)), _mod(k - b)))
         p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
         pp = np.sqrt(np.maximum(p2, 0))
         k = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, pp)
-        best = _take(best, p2 >= -1e-9, _mod(k - a) + pp + _mod(k - b))
-        # RSL
+        out.append(("LSR", p2 >= -1e-9, _mod(k - a), pp, _mod(k - b)))
         p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
         pp = np.sqrt(np.maximum(p2, 0))
         k = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, pp)
-        best = _take(best, p2 >= -1e-9, _mod(a - k) + pp + _mod(b - k))
-        # RLR
+        out.append(("RSL", p2 >= -1e-9, _mod(a - k), pp, _mod(b - k)))
         c = (6.0 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8.0
         pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1, 1)))
         t = _mod(a - np.arctan2(ca - cb, d - sa + sb) + pp / 2.0)
-        best = _take(best, np.abs(c) <= 1 + 1e-9, t + pp + _mod(a - b - t + pp))
-        # LRL
+        out.append(("RLR", np.abs(c) <= 1 + 1e-9, t, pp, _mod(a - b - t + pp)))
         c = (6.0 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8.0
         pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1, 1)))
         t = _mod(-a - np.arctan2(ca - cb, d + sa - sb) + pp / 2.0)
-        best = _take(best, np.abs(c) <= 1 + 1e-9, t + pp + _mod(b - a - t + pp))
+        out.append(("LRL", np.abs(c) <= 1 + 1e-9, t, pp, _mod(b - a - t + pp)))
+    return out
+
+
+def shortest(p0: np.ndarray, h0, p1: np.ndarray, h1, r: float) -> np.ndarray:
+    """Length of the shortest path of curvature at most ``1 / r`` from ``p0`` (``(..., 2)``)
+    heading ``h0`` to ``p1`` heading ``h1`` (broadcast); ``inf`` where no word exists
+    (never for all six together)."""
+    segs = _segments(p0, h0, p1, h1, r)
+    best = np.full(np.broadcast(*segs[0][1:]).shape, np.inf)
+    for _, valid, t, p, q in segs:
+        best = _take(best, valid, t + p + q)
     return best * r
 
 
@@ -131,40 +137,6 @@ def words(p0, h0: float, p1, h1: float, r: float) -> list[Word]:
     >>> [(w.word, round(w.length, 1), round(w.turn, 2)) for w in ws[:2]]
     [('LSR', 102.0, 0.0), ('RSR', 164.8, -6.28)]
     """
-    dx, dy = float(p1[0] - p0[0]), float(p1[1] - p0[1])
-    d = np.hypot(dx, dy) / r
-    theta = np.arctan2(dy, dx)
-    a, b = float(_mod(h0 - theta)), float(_mod(h1 - theta))
-    sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
-    cab = np.cos(a - b)
-    out = []
-    p2 = 2 + d * d - 2 * cab + 2 * d * (sa - sb)
-    if p2 >= -1e-9:
-        k = np.arctan2(cb - ca, d + sa - sb)
-        out.append(("LSL", _mod(k - a), np.sqrt(max(p2, 0.0)), _mod(b - k)))
-    p2 = 2 + d * d - 2 * cab + 2 * d * (sb - sa)
-    if p2 >= -1e-9:
-        k = np.arctan2(ca - cb, d - sa + sb)
-        out.append(("RSR", _mod(a - k), np.sqrt(max(p2, 0.0)), _mod(k - b)))
-    p2 = -2 + d * d + 2 * cab + 2 * d * (sa + sb)
-    if p2 >= -1e-9:
-        pp = np.sqrt(max(p2, 0.0))
-        k = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, pp)
-        out.append(("LSR", _mod(k - a), pp, _mod(k - b)))
-    p2 = d * d - 2 + 2 * cab - 2 * d * (sa + sb)
-    if p2 >= -1e-9:
-        pp = np.sqrt(max(p2, 0.0))
-        k = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, pp)
-        out.append(("RSL", _mod(a - k), pp, _mod(b - k)))
-    c = (6.0 - d * d + 2 * cab + 2 * d * (sa - sb)) / 8.0
-    if abs(c) <= 1 + 1e-9:
-        pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
-        t = _mod(a - np.arctan2(ca - cb, d - sa + sb) + pp / 2.0)
-        out.append(("RLR", t, pp, _mod(a - b - t + pp)))
-    c = (6.0 - d * d + 2 * cab + 2 * d * (sb - sa)) / 8.0
-    if abs(c) <= 1 + 1e-9:
-        pp = _mod(_TWO_PI - np.arccos(np.clip(c, -1.0, 1.0)))
-        t = _mod(-a - np.arctan2(ca - cb, d + sa - sb) + pp / 2.0)
-        out.append(("LRL", t, pp, _mod(b - a - t + pp)))
+    out = [(w, t, p, q) for w, ok, t, p, q in _segments(p0, h0, p1, h1, r) if ok]
     ws = [Word(w, (float(t) * r, float(p) * r, float(q) * r), float(r)) for w, t, p, q in out]
     return sorted(ws, key=lambda w: w.length)
