@@ -98,9 +98,11 @@ class Interchange:
 
 
 def _collector(b: LayoutState, ramp: str, spec: RampSpec) -> RampFit | None:
-    """A collector-distributor road without a search (:func:`collector_fit`)."""
+    """A collector-distributor road without a search (:func:`collector_fit`), long enough
+    for its outer connectors to go round their loops
+    (:meth:`flyover.geometry.levels.LevelPlan.collector_room`)."""
     kids = [b.features[k].radius_m for k in b.moves.kids(ramp) if k in b.features]
-    return collector_fit(spec, kids, b.obstacles(), b.st)
+    return collector_fit(spec, kids, b.obstacles(), b.st, b.levels.collector_room(ramp))
 
 
 def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,

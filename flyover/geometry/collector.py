@@ -33,14 +33,17 @@ def arc(p: np.ndarray, heading: float, turn: float, radius: float) -> tuple[np.n
 
 
 def collector_fit(spec: RampSpec, kid_radii: Iterable[float], obstacles: Obstacles,
-                  st: LayoutSettings) -> RampFit | None:
+                  st: LayoutSettings, round_m: tuple[float, float] = (0.0, 0.0)
+                  ) -> RampFit | None:
     """A collector-distributor road: it leaves its carriageway on a reverse curve, runs
     straight beside it ``cd_offset_m`` from its edge, and rejoins it on a reverse curve
     (plan: two pairs of circular arcs at the target radius on the lane centre, or
     ``inf_reference_m`` for an ``inf`` target, and a straight). It reaches from the
     crossing's room (the rails' inner ends) far enough for the ramps attached to it
-    (radii ``kid_radii``) to turn at their radii. ``None`` when the rails leave no room
-    for it."""
+    (radii ``kid_radii``) to turn at their radii, and its straight part at least
+    ``round_m`` (before, after) from the crossing, where an outer connector leaves
+    (joins) it to go round its loop (:meth:`flyover.geometry.levels.LevelPlan.collector_room`).
+    ``None`` when the rails leave no room for it."""
     a, e = spec.start, spec.end
     r_lane = spec.target_radius_m
     if math.isinf(r_lane):
@@ -51,8 +54,12 @@ def collector_fit(spec: RampSpec, kid_radii: Iterable[float], obstacles: Obstacl
     s_curve = 2.0 * r_lane * math.sin(theta)  # along the carriageway
     r_kids = max([min(r, st.fit.inf_reference_m) for r in kid_radii] or [0.0])
     room = s_curve + 2.0 * (r_kids + st.gap_m)
-    sa = float(np.clip(a.hi - room, a.lo, a.hi))
-    sb = float(np.clip(e.lo + room, e.lo, e.hi))
+    sa, sb = a.hi - room, e.lo + room
+    if round_m[0] > 0:  # the rails' stations run along the carriageway from the crossing
+        sa = min(sa, -(round_m[0] + s_curve))
+    if round_m[1] > 0:
+        sb = max(sb, round_m[1] + s_curve)
+    sa, sb = float(np.clip(sa, a.lo, a.hi)), float(np.clip(sb, e.lo, e.hi))
     (pa, ha, _), (pb, hb, _) = a.at(np.array([sa])), e.at(np.array([sb]))
     pa, pb, h = pa[0], pb[0], float(ha[0])
     along = float(np.dot(pb - pa, [math.cos(h), math.sin(h)]))

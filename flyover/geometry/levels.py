@@ -26,7 +26,9 @@ the settings.
   from the crossing to climb to (descend from) the crest at the ramp's slope.
 * A stub one of whose children is a loop's outer connector (a cloverstack's ``eA1``,
   ``oA1`` going round ``lB1``) ends far enough out for that child to go round the loop
-  at their radius targets (:meth:`LevelPlan.round_room`).
+  at their radius targets (:meth:`LevelPlan.round_room`); a collector-distributor road
+  runs straight far enough for the connector leaving (joining) it to go round the loop
+  joining (leaving) it (:meth:`LevelPlan.collector_room`).
 """
 
 from __future__ import annotations
@@ -173,30 +175,69 @@ class LevelPlan:
     def round_room(self, ramp: str) -> float:
         """Room toward the crossing where ``ramp`` starts (ends) on a stub, if it is the
         outer connector of a loop (:meth:`Movements.goes_round_loop`, on a road both
-        attach to), so that it can go round the loop without an S-bend: a loop of radius
-        ``R`` (or, if its climb between its roads at its slope is longer than its turn,
-        the radius of a loop turning that length) in the corner of the two roads reaches
-        ``sqrt(2) R + R`` out along the
-        corner's diagonal (beyond the room ``c`` between their centre lines); a connector
-        running along that diagonal outside it meets the road ``2 R + sqrt(2) (R + c)``
-        from the crossing, and leaves it about half its own radius earlier (a 45° turn),
-        after a taper (``gap_m``). 0 otherwise."""
-        moves, st = self.moves, self.st
+        attach to), so that it can go round the loop without an S-bend
+        (:meth:`_diagonal`). 0 otherwise."""
+        moves = self.moves
         mine = {e[0] for e in moves.ends(ramp) if e is not None and e[0] in self.roads}
         for loop in moves.topo.ramps:
             theirs = {e[0] for e in moves.ends(loop) if e is not None and e[0] in self.roads}
             if loop in self.features and ramp in self.features and any(
                     moves.goes_round_loop(ramp, loop, road) for road in sorted(mine & theirs)):
-                def built(r: float) -> float:
-                    return r if math.isfinite(r) else st.fit.inf_reference_m
-
-                c = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
-                # a loop that must climb farther than its turn is long is as big as a loop
-                # turning that length (its climb between its roads at its slope)
-                zs = [self.roads[r].z for r in theirs] or [0.0]
-                g = max(self.features[loop].slope_pct, 0.5) / 100.0
-                climb = float(climb_distance(max(zs) - min(zs), g, st.fit.transition_m))
-                r_loop = max(built(self.features[loop].radius_m), climb / (1.5 * math.pi))
-                return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
-                    + 0.5 * built(self.features[ramp].radius_m) + st.gap_m
+                return self._diagonal(ramp, loop, [self.roads[r].z for r in theirs])
         return 0.0
+
+    def collector_room(self, cd: str) -> tuple[float, float]:
+        """How far from the crossing (m, along the carriageway it runs beside) the
+        collector-distributor road ``cd`` must run straight before and after it, so that
+        the outer connector leaving it before the loop joins it goes round that loop
+        (``cloverleaf_cd``'s ``oA1`` leaving ``cA1`` round ``lB1``), and the one joining it
+        after the loop leaves it round that one (``oB2`` round ``lA1``): the connector's
+        diagonal (:meth:`_diagonal`) from the corner of the two C-D roads (their offset
+        from their carriageways' edges), moved out by as far as the loop may join or leave
+        them beyond the crossing's room (``stub_window_m``,
+        :meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). 0 at an end with no such
+        pair. Sized from its own ramps' radii alone, the C-D road ended short of where a
+        280 m connector clears a 210 m loop: it went over the loop."""
+        moves, st, g = self.moves, self.st, self.moves.g
+        road = ends(moves.topo, cd)[0][0]
+        kids = [k for k in moves.kids(cd) if k in self.features]
+        other = max([x.half_width for x in self.roads.values()
+                     if x.expressway != self.roads[road].expressway] or [0.0])
+        corner = other + st.crossing_margin_m + st.stub_window_m \
+            + st.cd_offset_m + moves.lanes(cd) * st.ramp_lane_width_m
+        out = [0.0, 0.0]
+        for conn, loop in ((c, lp) for c in kids for lp in kids
+                           if moves.is_outer_connector(c, lp)):
+            pos = [(g.edges[cd, k] if g.has_edge(cd, k) else g.edges[k, cd]).get("pos")
+                   for k in (conn, loop)]
+            if None in pos or pos[0] == pos[1]:
+                continue
+            zs = [self.roads[r].z for r in (moves.road_of(loop, False), moves.road_of(loop, True))
+                  if r in self.roads]
+            end = 0 if pos[0] < pos[1] else 1
+            out[end] = max(out[end], corner + self._diagonal(conn, loop, zs))
+        return out[0], out[1]
+
+    def _diagonal(self, ramp: str, loop: str, zs: list[float]) -> float:
+        """How far from the corner of the two roads a loop joins the outer connector
+        ``ramp`` must leave (join) the road it shares with ``loop`` to go round it: a loop of
+        radius ``R`` (or, if its climb between its roads at heights ``zs`` at its slope is
+        longer than its turn, the radius of a loop turning that length) in the corner of
+        the two roads reaches ``sqrt(2) R + R`` out along the corner's diagonal (beyond the
+        room ``c`` between their centre lines); a connector running along that diagonal
+        outside it meets the road ``2 R + sqrt(2) (R + c)`` from the corner, and leaves it
+        about half its own radius earlier (a 45° turn), after a taper (``gap_m``)."""
+        st = self.st
+
+        def built(r: float) -> float:
+            return r if math.isfinite(r) else st.fit.inf_reference_m
+
+        c = (self.moves.lanes(ramp) + self.moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
+        # a loop that must climb farther than its turn is long is as big as a loop
+        # turning that length (its climb between its roads at its slope)
+        zs = zs or [0.0]
+        g = max(self.features[loop].slope_pct, 0.5) / 100.0
+        climb = float(climb_distance(max(zs) - min(zs), g, st.fit.transition_m))
+        r_loop = max(built(self.features[loop].radius_m), climb / (1.5 * math.pi))
+        return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
+            + 0.5 * built(self.features[ramp].radius_m) + st.gap_m
