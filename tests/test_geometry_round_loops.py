@@ -144,3 +144,60 @@ def test_a_loop_on_a_cd_road_keeps_near_the_crossing_and_its_connector_goes_beyo
     bound = b.windows.loops.round_loop("lB1", "A1", b.width["oA1"], -1, feats["oA1"])
     t_hi = float(np.interp(start.hi, cd["s"], _along(b, "A1", cd["xy"])))
     assert t_hi <= bound + 1.0
+
+
+#: the workflow's cloverleaf_cd feature set 2 (results/features, sampling version 5):
+#: 280 m connectors round 210 m loops in every quadrant
+CD_2_LANES = {"A1": 5, "A2": 3, "B1": 5, "B2": 5}
+CD_2 = {"cA1": (210.0, 0.0), "cA2": (210.0, 0.0), "cB1": (210.0, 0.0), "cB2": (210.0, 0.0),
+        "lA1": (210.0, 5.0), "lA2": (210.0, 1.0), "lB1": (210.0, 1.0), "lB2": (210.0, 3.0),
+        "oA1": (280.0, 5.0), "oA2": (280.0, 4.0), "oB1": (280.0, 4.0), "oB2": (280.0, 5.0)}
+
+
+def test_a_cd_road_runs_straight_to_where_its_wide_connector_clears_its_loop():
+    """A C-D road's straight part reached only as far as its own ramps' radii need: where
+    a 280 m connector clears a 210 m loop at 45 degrees (~1,060 m before the crossing)
+    lay beyond it, so oA1's window on cA1 could not end there and it was lifted over
+    lB1. Now the C-D road runs straight that far (``LevelPlan.collector_room``), and the
+    window ends where the connector clears the loop, on the straight part."""
+    feats = {r: RampFeatures(*v) for r, v in CD_2.items()}
+    b = _cd_state(feats)
+    cd = b.fitted.stations["cA1"]
+    t_cd = np.maximum.accumulate(_along(b, "A1", cd["xy"]))
+    start = b.spec("oA1", feats["oA1"]).start
+    bound = b.windows.loops.round_loop("lB1", "A1", b.width["oA1"], -1, feats["oA1"])
+    assert bound < -1000.0  # the loop reaches far out: the connector leaves early
+    t_lo, t_hi = (float(np.interp(s, cd["s"], t_cd)) for s in (start.lo, start.hi))
+    assert t_hi <= bound + 1.0 and t_hi - t_lo >= 1.0
+    # on the straight part: cA1 runs beside A1 there (its reverse curve lies before)
+    heading = np.interp(start.hi, cd["s"], cd["heading"])
+    assert abs(heading - b.roads["A1"].heading) < 1e-6
+    room = b.levels.collector_room("cA1")
+    assert room[0] > 1000.0 and room[1] > 1000.0  # oB2 joins it after lA1 leaves: the same
+
+
+def test_cloverleaf_cd_wide_connectors_go_round_their_loops():
+    """Feature set 2 built as the workflow builds it (its seed): all four 280 m connectors
+    went over their 210 m loops; now each goes round, within its targets."""
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(*v) for r, v in CD_2.items()}
+    ic = build_interchange(t, CD_2_LANES, feats, seed=2726180586)
+    crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
+    for p in round_loops(t):
+        assert frozenset((p.connector, p.loop)) not in crossed, p
+    assert all(o.fit.ok and o.fit.conflicts == 0 for o in ic.outcomes)
+
+
+def test_a_cd_roads_round_room_follows_the_pair_at_each_end():
+    """Each end of a C-D road is sized by the pair attached there: cA1's start by oA1
+    leaving it round lB1, its end by oB2 joining it round lA1; a narrower pair at one end
+    needs less room there and leaves the other end as it was. A ramp that is no C-D road
+    gets none."""
+    t = catalog_topologies()["cloverleaf_cd"]
+    feats = {r: RampFeatures(*v) for r, v in CD_2.items()}
+    wide = LayoutState(t, CD_2_LANES, feats, LayoutSettings(), 7).levels
+    assert wide.collector_room("oA1") == (0.0, 0.0)
+    small = dict(feats, oA1=RampFeatures(150.0, 5.0), lB1=RampFeatures(40.0, 5.0))
+    narrow = LayoutState(t, CD_2_LANES, small, LayoutSettings(), 7).levels
+    assert narrow.collector_room("cA1")[0] < wide.collector_room("cA1")[0] - 300.0
+    assert narrow.collector_room("cA1")[1] == wide.collector_room("cA1")[1]
