@@ -201,3 +201,29 @@ def test_a_cd_roads_round_room_follows_the_pair_at_each_end():
     narrow = LayoutState(t, CD_2_LANES, small, LayoutSettings(), 7).levels
     assert narrow.collector_room("cA1")[0] < wide.collector_room("cA1")[0] - 300.0
     assert narrow.collector_room("cA1")[1] == wide.collector_room("cA1")[1]
+
+
+def test_a_cd_road_end_with_a_narrow_pair_is_as_long_as_that_pair_needs():
+    """Both ends of a C-D road ran straight for twice its widest ramp's radius: a 40 m
+    connector round a 30 m loop had ~1 km of C-D road before the crossing because the
+    connector at its other end was 280 m wide. Each end with a pair now runs straight as
+    far as that pair's connector needs to go round its loop, shorter here, longer for the
+    wide pair at the other end."""
+    feats = {r: RampFeatures(*v) for r, v in CD_2.items()}
+    feats |= {"oA1": RampFeatures(40.0, 5.0), "lB1": RampFeatures(30.0, 5.0)}
+    b = _cd_state(feats)
+    st = b.st
+    before, after = b.levels.collector_room("cA1")
+    theta = math.acos(1.0 - st.cd_offset_m / (2.0 * 210.0))
+    s_curve = 2.0 * 210.0 * math.sin(theta)
+    t_cd = _along(b, "A1", b.fitted.stations["cA1"]["xy"])
+    assert math.isclose(t_cd[0], -(before + s_curve), abs_tol=1.0)
+    assert math.isclose(t_cd[-1], after + s_curve, abs_tol=1.0)
+    # its own ramps' radii alone: twice the widest (280 m) beyond the rails' inner end
+    own = b.spec("cA1", feats["cA1"]).start.hi - s_curve - 2.0 * (280.0 + st.gap_m)
+    assert t_cd[0] > own + 300.0 and after > before + 300.0
+    # and oA1 still leaves it where it goes round lB1
+    start = b.spec("oA1", feats["oA1"]).start
+    bound = b.windows.loops.round_loop("lB1", "A1", b.width["oA1"], -1, feats["oA1"])
+    t_hi = float(np.interp(start.hi, b.fitted.stations["cA1"]["s"], np.maximum.accumulate(t_cd)))
+    assert t_hi <= bound + 1.0

@@ -2,7 +2,8 @@
 
 Decides the plan of a ramp that leaves a carriageway and rejoins the same one
 (a C-D road); reads its spec (rails, width, target radius), the radii of the
-ramps attached to it and the settings.
+ramps attached to it, the room its outer connectors need to go round their loops
+(:meth:`flyover.geometry.levels.LevelPlan.collector_room`) and the settings.
 """
 
 from __future__ import annotations
@@ -40,9 +41,10 @@ def collector_fit(spec: RampSpec, kid_radii: Iterable[float], obstacles: Obstacl
     (plan: two pairs of circular arcs at the target radius on the lane centre, or
     ``inf_reference_m`` for an ``inf`` target, and a straight). It reaches from the
     crossing's room (the rails' inner ends) far enough for the ramps attached to it
-    (radii ``kid_radii``) to turn at their radii, and its straight part at least
-    ``round_m`` (before, after) from the crossing, where an outer connector leaves
-    (joins) it to go round its loop (:meth:`flyover.geometry.levels.LevelPlan.collector_room`).
+    (radii ``kid_radii``) to turn at their radii; an end where an outer connector leaves
+    (joins) it to go round a loop attached to it instead runs straight as far from the
+    crossing as that connector needs (``round_m``, before and after the crossing, 0 where
+    there is none: :meth:`flyover.geometry.levels.LevelPlan.collector_room`).
     ``None`` when the rails leave no room for it."""
     a, e = spec.start, spec.end
     r_lane = spec.target_radius_m
@@ -56,9 +58,9 @@ def collector_fit(spec: RampSpec, kid_radii: Iterable[float], obstacles: Obstacl
     room = s_curve + 2.0 * (r_kids + st.gap_m)
     sa, sb = a.hi - room, e.lo + room
     if round_m[0] > 0:  # the rails' stations run along the carriageway from the crossing
-        sa = min(sa, -(round_m[0] + s_curve))
+        sa = -(round_m[0] + s_curve)  # the connector's need, longer or shorter
     if round_m[1] > 0:
-        sb = max(sb, round_m[1] + s_curve)
+        sb = round_m[1] + s_curve
     sa, sb = float(np.clip(sa, a.lo, a.hi)), float(np.clip(sb, e.lo, e.hi))
     (pa, ha, _), (pb, hb, _) = a.at(np.array([sa])), e.at(np.array([sb]))
     pa, pb, h = pa[0], pb[0], float(ha[0])

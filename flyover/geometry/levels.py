@@ -196,9 +196,10 @@ class LevelPlan:
         from their carriageways' edges), moved out by as far as the loop may join or leave
         them beyond the crossing's room (``stub_window_m``,
         :meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). 0 at an end with no such
-        pair, and for a ramp that is no C-D road. Sized from its own ramps' radii alone, the
-        C-D road ended short of where a 280 m connector clears a 210 m loop: it went over
-        the loop."""
+        pair, and for a ramp that is no C-D road. Sized from its own ramps' radii alone (twice
+        the widest, at both ends), the C-D road ended short of where a 280 m connector
+        clears a 210 m loop (it went over the loop), and ran far beyond where a narrow pair
+        needs it."""
         moves, st, g = self.moves, self.st, self.moves.g
         if not moves.same_road(cd):
             return 0.0, 0.0

@@ -192,11 +192,12 @@ def class_tables(stage):
 #     (flyover.geometry.guess), and of two missing restarts the one within its radius is kept
 #     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912;
 #     33, not 32: main's 32 is issue33round's, merged after this branch left 0af5f78)
-# 34: a collector-distributor road runs straight as far from the crossing as its outer
-#     connector needs to go round the loop attached to it at 45 degrees (levels.LevelPlan.
-#     collector_room; before, only as far as its own ramps' radii: a 280 m connector could
-#     not leave it beyond a 210 m loop and went over it): cloverleaf_cd 85.5 -> 96.9 % round;
-#     other designs unchanged (no C-D road)
+# 34: each end of a collector-distributor road where an outer connector leaves (joins) it
+#     round a loop attached to it runs straight as far from the crossing as that connector
+#     needs to go round the loop at 45 degrees (levels.LevelPlan.collector_room; before,
+#     both ends twice its widest ramp's radius: a 280 m connector could not leave it beyond
+#     a 210 m loop and went over it, a narrow pair had ~1 km): cloverleaf_cd 85.5 -> 99.2 %
+#     round, C-D road median 1,928 -> 1,604 m; other designs unchanged (no C-D road)
 GEOMETRY_VERSION = 34
 
 
