@@ -275,3 +275,44 @@ def test_a_ramp_fitted_before_a_continuation_leaves_it_room_for_the_writers_junc
     u = b.windows.rail("u", feats["u"], ("B1", Label.IN_L), False, False, st.ramp_lane_width_m)
     assert u.lo >= t_k + st.gap_m - 1e-9 or u.hi <= t_k - st.gap_m + 1e-9, (u.lo, u.hi, t_k)
     assert u.lo >= b1.t_lo + st.gap_m - 1e-9
+
+
+def _stub_into_stub():
+    """A stub ``s`` off A1 splits into the 1-lane ramp ``u`` (right) and the stub ``t``
+    (left), which splits in two (``v``, ``w``): Columbus's ``r8`` → ``r2`` + ``r13`` →
+    ``r6`` + ``r12``, without the rest."""
+    c = Connection
+    return Topology.build(
+        "stub_into_stub", [Road(r, r[0]) for r in ("A1", "A2", "B1", "B2")],
+        [Ramp(x) for x in "stuvw"],
+        [c("A1", "s", Label.OUT_R, 0.3), c("s", "t", Label.OUT_L), c("s", "u", Label.OUT_R),
+         c("u", "B1", Label.IN_R, 0.7), c("t", "v", Label.OUT_L), c("t", "w", Label.OUT_R),
+         c("v", "B2", Label.IN_R, 0.7), c("w", "A2", Label.IN_R, 0.7)])
+
+
+def test_a_stub_carries_every_lane_of_the_ramps_it_splits_into():
+    """A stub's children take its lanes side by side at its free end (the left one its
+    left lanes, the right one its right lanes), so it carries all of theirs: ``s`` splits
+    into ``t`` (2 lanes, for ``v`` and ``w``) and ``u`` (1), so it has 3. It had 2, one per
+    child: ``u``'s lane lay on ``t``'s right lane and the two ran 0 m apart in height past
+    the fork (Columbus drawn set 3, ``r2`` on ``r13`` at 15 m)."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+
+    topo = _stub_into_stub()
+    moves = Movements(topo, {})
+    assert [moves.lanes(r) for r in "stuvw"] == [3, 2, 1, 1, 1]
+    for stub in ("s", "t"):
+        kids = [v for _, v in topo.graph.out_edges(stub)]
+        assert sum(moves.lanes(k) for k in kids) == moves.lanes(stub)
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_fork_of_r8_has_a_lane_for_each_of_r2_and_r13s():
+    """Columbus's ``r8`` splits into ``r2`` and the collector ``r13`` (itself splitting
+    into ``r6`` and ``r12``): no lane of ``r2`` lies on one of ``r13`` at the fork."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    b = LayoutState(topo, {}, {r: RampFeatures(60.0, 4.0) for r in topo.ramps},
+                    LayoutSettings(), 0)
+    assert b.width["r8"] == pytest.approx(b.width["r2"] + b.width["r13"])
