@@ -177,21 +177,16 @@ class Movements:
         return [v for _, v, d in g.out_edges(ramp, data=True) if d["label"].is_out] + \
             [u for u, _, d in g.in_edges(ramp, data=True) if not d["label"].is_out]
 
-    def lanes(self, ramp: str, seen: frozenset[str] = frozenset()) -> int:
-        """Lanes of a ramp: one, and a stub the lanes of every ramp it splits into (is
-        formed from), side by side at its free end, so a stub splitting into a stub carries
-        that one's lanes too (Columbus's ``r8`` splits into the 1-lane ``r2`` and the stub
-        ``r13``, which splits in two: 3 lanes, not 2 with ``r2``'s lane on one of
-        ``r13``'s)."""
+    def lanes(self, ramp: str) -> int:
+        """Lanes of a ramp: a stub has one per ramp it splits into (is formed from)."""
         start, end = ends(self.topo, ramp)
-        seen = seen | {ramp}
         if end is None:
-            kids = [v for _, v, d in self.g.out_edges(ramp, data=True) if d["label"].is_out]
-        elif start is None:
-            kids = [u for u, _, d in self.g.in_edges(ramp, data=True) if not d["label"].is_out]
-        else:
-            return 1
-        return max(1, sum(1 if k in seen else self.lanes(k, seen) for k in kids))
+            return max(1, sum(1 for _, _, d in self.g.out_edges(ramp, data=True)
+                              if d["label"].is_out))
+        if start is None:
+            return max(1, sum(1 for _, _, d in self.g.in_edges(ramp, data=True)
+                              if not d["label"].is_out))
+        return 1
 
     def other_road(self, ramp: str, road: str) -> str | None:
         """The road at the other end of ``ramp``'s chain from ``road``."""

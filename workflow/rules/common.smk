@@ -192,11 +192,7 @@ def class_tables(stage):
 #     (flyover.geometry.guess), and of two missing restarts the one within its radius is kept
 #     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912;
 #     33, not 32: main's 32 is issue33round's, merged after this branch left 0af5f78)
-# 35: a stub carries the lanes of every ramp it splits into (is formed from), a stub's
-#     included (chains.Movements.lanes): Columbus's r8, splitting into r2 and the collector
-#     r13 (itself splitting in two), has 3 lanes, not 2 with r2's lane on one of r13's
-#     (drawn set 3: r13/r2 0 m apart in height past the fork); catalog unchanged
-GEOMETRY_VERSION = 35
+GEOMETRY_VERSION = 33
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
