@@ -275,3 +275,40 @@ def test_a_ramp_fitted_before_a_continuation_leaves_it_room_for_the_writers_junc
     u = b.windows.rail("u", feats["u"], ("B1", Label.IN_L), False, False, st.ramp_lane_width_m)
     assert u.lo >= t_k + st.gap_m - 1e-9 or u.hi <= t_k - st.gap_m + 1e-9, (u.lo, u.hi, t_k)
     assert u.lo >= b1.t_lo + st.gap_m - 1e-9
+
+
+DC = OSM_DIR / "26_us_dc_i66_us50_e_st_expwy.osm"
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_right_turn_between_two_roads_on_one_level_is_a_level_ramp():
+    """DC (file 26): I-66 and the E Street Expressway both end here, on one level (6.5 m,
+    above I-66 / US 50). r14 (E Street to I-66 North) leaves and joins on the right and
+    turns right by 45°, with no crest planned: it was fitted level and every slope drawn
+    for it was recorded infeasible (`level ramp (both ends at z=6.5 m) cannot have a 3 %
+    slope`, sets 0-2 of 4 drawn). Now sampling fixes its slope at 0. r5 (I-66 North to
+    E Street, 135° round E Street's leg) crosses r14 and is lifted over it when it is
+    drawn a slope (fixed level, it met r14 at its level on sets 0 and 1); r10 (a left exit
+    across the Potomac Freeway's lanes, lifted over them) and the flyovers r12, r13 keep
+    their slopes too."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(DC) if t.ramps)
+    level = level_ramps(topo)
+    assert "r14" in level
+    assert not {"r5", "r10", "r12", "r13", "r1", "r2", "r6"} & level
+    b = LayoutState(topo, {}, {r: RampFeatures(60.0, 0.0 if r in level else 4.0)
+                               for r in topo.ramps}, LayoutSettings(), 0)
+    spec = b.spec("r14", b.features["r14"])
+    assert np.ptp(np.concatenate([spec.start.z, spec.end.z])) == 0.0
+    assert spec.z_crest is None
+
+
+def test_no_catalog_design_gains_a_level_ramp():
+    """The catalog's through expressways are each on their own level and a T's ending one
+    above them: only cloverleaf_cd's collector-distributor roads are level."""
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    level = {name: sorted(level_ramps(t)) for name, t in catalog_topologies().items()}
+    assert {n: v for n, v in level.items() if v} == {
+        "cloverleaf_cd": ["cA1", "cA2", "cB1", "cB2"]}

@@ -112,9 +112,11 @@ TURNING_RAD = 0.5
 def level_ramps(topology: Topology) -> frozenset[str]:
     """The ramps the layout necessarily keeps level: both ends on one road, a ramp
     between two expressways that continue one another (on one line, one level:
-    :func:`flyover.geometry.chains.continuations`), and a collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
+    :func:`flyover.geometry.chains.continuations`), a collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
     on the road layout of :mod:`flyover.geometry.roads`, which does not depend on the
-    sample).
+    sample), and a right turn (leaves and joins on the right) by at most 90° between two
+    roads on one level without a planned crest (two expressways that end here: DC's
+    ``r14``), which stays in the corner of its legs and is fitted at that level.
 
     Parameters
     ----------
@@ -126,7 +128,8 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     frozenset of str
         Ramp ids whose start (``Out-*``) and end (``In-*``) attach to the same
         road, e.g. collector-distributor roads, ramps straight on from one expressway
-        to the next, and split stubs that go on level.
+        to the next, split stubs that go on level, and right turns between two roads
+        on one level.
     """
     g = topology.graph
     out = set()
@@ -139,10 +142,23 @@ def level_ramps(topology: Topology) -> frozenset[str]:
             out.add(ramp)
     # a ramp from an expressway to one it continues runs along their line, on their level
     out |= {ramp for c in continuations(topology) for ramp in c.ramps}
-    if stubs:  # a collector road's second stub goes on level
-        st = LayoutSettings()
-        plan = LevelPlan(Movements(topology, layout_roads(topology, {}, st)), {}, st)
-        out |= {ramp for ramp in stubs if plan.continues_level(ramp)}
+    st = LayoutSettings()
+    roads = layout_roads(topology, {}, st)
+    moves = Movements(topology, roads)
+    plan = LevelPlan(moves, {}, st)
+    # a collector road's second stub goes on level
+    out |= {ramp for ramp in stubs if plan.continues_level(ramp)}
+    # a right turn (leaving and joining on the right) by at most 90° between two roads on
+    # one level (two expressways ending here: DC's r14) stays in the corner of its two legs,
+    # crosses nothing and is fitted at that level; one turning farther goes round a leg
+    # and over the reverse movement's ramp (DC's r5, 135°, over r14)
+    for ramp in topology.ramps:
+        start, end = _ends(topology, ramp)
+        if start and end and start[0] in roads and end[0] in roads \
+                and start[1].side == end[1].side == "right" \
+                and -math.pi / 2 - 1e-9 <= (moves.movement(ramp) or 0.0) < 0.0 \
+                and roads[start[0]].z == roads[end[0]].z and ramp not in plan.crests:
+            out.add(ramp)
     return frozenset(out)
 
 
