@@ -192,7 +192,12 @@ def class_tables(stage):
 #     (flyover.geometry.guess), and of two missing restarts the one within its radius is kept
 #     (turbine's right turns merging 1-2 km out beyond the left turn: first try 893 -> 898/912;
 #     33, not 32: main's 32 is issue33round's, merged after this branch left 0af5f78)
-GEOMETRY_VERSION = 33
+# 36: the first of a stub's two children out of its fork (into its join) keeps clear of the
+#     way its sibling needs, turning at its radius target until the two are a clearance
+#     apart in height (flyover.geometry.fork; turbine's left turns swung right across their
+#     sibling right turn's start: first try 898 -> 903/912, stack4 1,512 -> 1,518/1,536);
+#     36, not 34: numbers 34-35 are left to the branches of this session merged first
+GEOMETRY_VERSION = 36
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
