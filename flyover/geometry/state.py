@@ -95,7 +95,9 @@ class LayoutState:
     def fork_room(self, spec: RampSpec) -> tuple[Approach, ...]:
         """The ways (:func:`flyover.geometry.fork.way_out`) of the ramps not fitted yet that
         leave (join) a stub at the free end that the ramp of ``spec`` leaves (joins) too:
-        its siblings at a fork (join), which it leaves room for."""
+        its siblings at a fork (join), which it leaves room for; none for a sibling whose
+        other end lies on a ramp not fitted yet (OSM Columbus's ``r11``: its spec needs
+        that ramp)."""
         out = []
         for end, rail, at_start in zip(ends(self.topo, spec.id), (spec.start, spec.end),
                                        (True, False)):
@@ -107,10 +109,14 @@ class LayoutState:
             z0 = float(rail.at(np.array([rail.lo]))[2][0])
             grade = departure_grade(spec, z0)
             for sib in self.moves.kids(stub):
+                here = ends(self.topo, sib)
                 if sib == spec.id or sib in self.fits or sib not in self.features \
-                        or ends(self.topo, sib)[0 if at_start else 1] is None \
-                        or ends(self.topo, sib)[0 if at_start else 1][0] != stub:
+                        or here[0 if at_start else 1] is None \
+                        or here[0 if at_start else 1][0] != stub:
                     continue
+                if any(e is not None and e[0] not in self.roads and e[0] not in self.fits
+                       for e in here):
+                    continue  # its other end is on a ramp not fitted yet: no spec to go by
                 way = way_out(self.spec(sib, self.features[sib]), at_start, grade, self.st)
                 if way is not None:
                     out.append(way)
