@@ -569,10 +569,13 @@ def test_an_interchange_with_a_ramp_still_crossing_is_built_again_with_other_see
     first build lA2 still meets something at its level; a rebuild with other seeds clears
     it, and the result says so (its seed, first-try failure and all the effort). (With one
     restart, that restart is the Dubins one, which clears lA2 in the first build: pinned to
-    the restarts the scenario was found with.)"""
+    the restarts the scenario was found with, and to the fits before the fork's room: lA2,
+    the first of eA2's children, keeping clear of rA2's way out clears it too.)"""
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
     _restarts_before_the_dubins_guess(monkeypatch)
+    monkeypatch.setattr(LayoutState, "fork_room", lambda self, spec: ())
 
     t = catalog_topologies()["turbine"]
     lanes = {"A1": 3, "A2": 3, "B1": 4, "B2": 4}
