@@ -101,8 +101,11 @@ def test_a_build_the_dense_check_finds_at_a_level_is_built_again(monkeypatch):
     scenario was found before the Dubins restart, :mod:`flyover.geometry.guess`, and the
     rank that keeps a restart within its radius, which fit rB1 otherwise and leave the
     first build clear: pinned to the search it was found with; seeds 0-16 set up none
-    with them.)"""
+    with them; and before the fork's room, :mod:`flyover.geometry.fork`.)"""
     from flyover.geometry import build as build_module  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    monkeypatch.setattr(LayoutState, "fork_room", lambda self, spec: ())
 
     monkeypatch.setattr(build_module, "can_guess", lambda spec: False)
     monkeypatch.setattr(build_module, "_restart_rank",

@@ -288,15 +288,19 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                 evals, secs = evals + e2, secs + s2
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
-        if fit is None and (fences := tuple(b.windows.loops.fences(ramp)) + tuple(
-                terminal_fences(b.moves, b.features, st, ramp))
-                + tuple(child_room_fences(b.moves, b.width, st, spec))):
+        fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
+            terminal_fences(b.moves, b.features, st, ramp)) + tuple(
+            child_room_fences(b.moves, b.width, st, spec))
+        room = () if fit is not None else b.fork_room(spec)
+        if fit is None and (fences or room):
             # a loop whose outer connector leaves a fitted stub keeps off where that one
             # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
             # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
-            # attaches on its road's side off that road's edge (:func:`child_room_fences`);
-            # if it cannot meet its targets so, it is fitted as any other ramp
-            fit, e2, s2 = _kept_within(b, spec, rseed, fences=fences)
+            # attaches on its road's side off that road's edge (:func:`child_room_fences`),
+            # the first of a stub's children out of its fork (into its join) off the way its
+            # sibling needs (:meth:`LayoutState.fork_room`); if it cannot meet its targets
+            # so, it is fitted as any other ramp
+            fit, e2, s2 = _kept_within(b, spec, rseed, fences=fences, approaches=room)
             evals, secs = evals + e2, secs + s2
         if fit is None and (ahead := b.approaches(ramp)):
             # a direct left turn keeps off where those fitted after it climb from their

@@ -13,10 +13,13 @@ from __future__ import annotations
 
 from typing import Mapping
 
+import numpy as np
+
 from flyover.geometry.approaches import Approach, approaches
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Obstacles, RampFit, RampSpec
 from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.fork import departure_grade, way_out
 from flyover.geometry.levels import LevelPlan
 from flyover.geometry.rails import AttachmentWindows
 from flyover.geometry.roads import layout_roads
@@ -87,6 +90,36 @@ class LayoutState:
                        for e in ends(self.topo, other)):
                 continue
             out += approaches(self.spec(other, self.features[other]), self.st.fit.transition_m)
+        return tuple(out)
+
+    def fork_room(self, spec: RampSpec) -> tuple[Approach, ...]:
+        """The ways (:func:`flyover.geometry.fork.way_out`) of the ramps not fitted yet that
+        leave (join) a stub at the free end that the ramp of ``spec`` leaves (joins) too:
+        its siblings at a fork (join), which it leaves room for; none for a sibling whose
+        other end lies on a ramp not fitted yet (OSM Columbus's ``r11``: its spec needs
+        that ramp)."""
+        out = []
+        for end, rail, at_start in zip(ends(self.topo, spec.id), (spec.start, spec.end),
+                                       (True, False)):
+            if end is None or end[0] in self.roads or rail is None:
+                continue
+            stub = end[0]
+            if ends(self.topo, stub)[1 if at_start else 0] is not None:
+                continue  # not at the stub's free end
+            z0 = float(rail.at(np.array([rail.lo]))[2][0])
+            grade = departure_grade(spec, z0)
+            for sib in self.moves.kids(stub):
+                here = ends(self.topo, sib)
+                if sib == spec.id or sib in self.fits or sib not in self.features \
+                        or here[0 if at_start else 1] is None \
+                        or here[0 if at_start else 1][0] != stub:
+                    continue
+                if any(e is not None and e[0] not in self.roads and e[0] not in self.fits
+                       for e in here):
+                    continue  # its other end is on a ramp not fitted yet: no spec to go by
+                way = way_out(self.spec(sib, self.features[sib]), at_start, grade, self.st)
+                if way is not None:
+                    out.append(way)
         return tuple(out)
 
     def record(self, ramp: str, fit: RampFit) -> None:

@@ -198,7 +198,11 @@ def class_tables(stage):
 #     both ends twice its widest ramp's radius: a 280 m connector could not leave it beyond
 #     a 210 m loop and went over it, a narrow pair had ~1 km): cloverleaf_cd 85.5 -> 99.2 %
 #     round, C-D road median 1,928 -> 1,604 m; other designs unchanged (no C-D road)
-GEOMETRY_VERSION = 34
+# 35: the first of a stub's two children out of its fork (into its join) keeps clear of the
+#     way its sibling needs, turning at its radius target until the two are a clearance
+#     apart in height (flyover.geometry.fork; turbine's left turns swung right across their
+#     sibling right turn's start: first try 898 -> 903/912, stack4 1,512 -> 1,518/1,536)
+GEOMETRY_VERSION = 35
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
