@@ -68,9 +68,15 @@ def test_a_cloverleaf_connector_goes_round_a_loop_reaching_far_out():
     """The same feature set built as the workflow builds it (its seed): oB2 went over lA1
     (a bridge the design does not have, ``ramp_crossings``); now round it, within its
     targets, and so does every other connector."""
-    t = catalog_topologies()["cloverleaf"]
-    feats = {r: RampFeatures(*v) for r, v in CLOVER_1.items()}
-    ic = build_interchange(t, CLOVER_1_LANES, feats, seed=4154944655)
+    _assert_all_round("cloverleaf", CLOVER_1, CLOVER_1_LANES, seed=4154944655)
+
+
+def _assert_all_round(design: str, targets: dict, lanes: dict, seed: int) -> None:
+    """Built with ``seed``, every outer connector of ``design`` goes round its loop (no
+    bridge between them, ``ramp_crossings``) and every ramp is within its targets."""
+    t = catalog_topologies()[design]
+    feats = {r: RampFeatures(*v) for r, v in targets.items()}
+    ic = build_interchange(t, lanes, feats, seed=seed)
     crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
     for p in round_loops(t):
         assert frozenset((p.connector, p.loop)) not in crossed, p
@@ -179,13 +185,7 @@ def test_a_cd_road_runs_straight_to_where_its_wide_connector_clears_its_loop():
 def test_cloverleaf_cd_wide_connectors_go_round_their_loops():
     """Feature set 2 built as the workflow builds it (its seed): all four 280 m connectors
     went over their 210 m loops; now each goes round, within its targets."""
-    t = catalog_topologies()["cloverleaf_cd"]
-    feats = {r: RampFeatures(*v) for r, v in CD_2.items()}
-    ic = build_interchange(t, CD_2_LANES, feats, seed=2726180586)
-    crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
-    for p in round_loops(t):
-        assert frozenset((p.connector, p.loop)) not in crossed, p
-    assert all(o.fit.ok and o.fit.conflicts == 0 for o in ic.outcomes)
+    _assert_all_round("cloverleaf_cd", CD_2, CD_2_LANES, seed=2726180586)
 
 
 def test_a_cd_roads_round_room_follows_the_pair_at_each_end():
