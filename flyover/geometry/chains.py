@@ -188,6 +188,11 @@ class Movements:
                               if not d["label"].is_out))
         return 1
 
+    def round_gap(self, connector: str, loop: str, lane_width_m: float) -> float:
+        """Room (m) an outer connector keeps between its lane centre and its loop's centre
+        line: its own lanes and half the loop's, and 1 m."""
+        return (self.lanes(connector) + self.lanes(loop) / 2) * lane_width_m + 1.0
+
     def other_road(self, ramp: str, road: str) -> str | None:
         """The road at the other end of ``ramp``'s chain from ``road``."""
         start, _ = ends(self.topo, ramp)

@@ -233,8 +233,8 @@ def round_loops(topology: Topology, settings: LayoutSettings | None = None
     for ramp in topology.ramps:
         for loop in topology.ramps:
             if moves.is_outer_connector(ramp, loop):
-                margin = (moves.lanes(ramp) + moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
-                out.append(RoundLoop(ramp, loop, margin, st.fit.inf_reference_m))
+                out.append(RoundLoop(ramp, loop, moves.round_gap(ramp, loop, st.ramp_lane_width_m),
+                                     st.fit.inf_reference_m))
     return tuple(out)
 
 

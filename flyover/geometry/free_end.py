@@ -129,8 +129,7 @@ class FreeEnds:
             g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
             climb = float(climb_distance(abs(q.z - z0), g, self.st.fit.transition_m))
             r_loop = max(r_kid, climb / (1.5 * np.pi))
-            c = (self.moves.lanes(ramp) + self.moves.lanes(kid) / 2) \
-                * self.st.ramp_lane_width_m + 1.0
+            c = self.moves.round_gap(ramp, kid, self.st.ramp_lane_width_m)
             need = t + q.half_width / abs(across) + r_loop + c
             out = need if out is None else max(out, need)
         return out

@@ -236,7 +236,7 @@ class LevelPlan:
         def built(r: float) -> float:
             return r if math.isfinite(r) else st.fit.inf_reference_m
 
-        c = (self.moves.lanes(ramp) + self.moves.lanes(loop) / 2) * st.ramp_lane_width_m + 1.0
+        c = self.moves.round_gap(ramp, loop, st.ramp_lane_width_m)
         # a loop that must climb farther than its turn is long is as big as a loop
         # turning that length (its climb between its roads at its slope)
         zs = zs or [0.0]
