@@ -34,7 +34,7 @@ from flyover.geometry._kernels import STEP_M
 from flyover.geometry.approaches import Approach
 from flyover.geometry.bezier import heading_vec
 from flyover.geometry.fit import RampSpec
-from flyover.geometry.profile import heights
+from flyover.geometry.profile import heights, parting_distance
 from flyover.geometry.settings import LayoutSettings
 
 __all__ = ["departure_grade", "way_out"]
@@ -70,7 +70,7 @@ def way_out(sibling: RampSpec, at_start: bool, grade: float,
     xy, head, z = rail.at(np.array([rail.lo]))
     z0 = float(z[0])
     g = departure_grade(sibling, z0)
-    reach = st.fit.clearance_m / max(grade + g, 0.005) + st.fit.transition_m
+    reach = parting_distance(grade + g, st.fit.clearance_m, st.fit.transition_m)
     radius = sibling.target_radius_m
     length = min(reach, abs(sibling.turn_rad) * radius) if math.isfinite(radius) else reach
     sign = 1.0 if at_start else -1.0  # forward from a fork, backward from a join

@@ -32,7 +32,7 @@ from flyover.geometry.chains import Movements, ends, road_of
 from flyover.geometry.fit import FreeEnd
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.levels import LevelPlan
-from flyover.geometry.profile import climb_distance
+from flyover.geometry.profile import climb_distance, loop_radius
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
 
 __all__ = ["FreeEnds", "COLLECTOR_TURN_RAD"]
@@ -126,9 +126,8 @@ class FreeEnds:
                 continue
             r_kid = self.levels.features[kid].radius_m
             r_kid = r_kid if np.isfinite(r_kid) else self.st.fit.inf_reference_m
-            g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
-            climb = float(climb_distance(abs(q.z - z0), g, self.st.fit.transition_m))
-            r_loop = max(r_kid, climb / (1.5 * np.pi))
+            r_loop = loop_radius(r_kid, abs(q.z - z0), self.levels.features[kid].slope_pct,
+                                 self.st.fit.transition_m)
             c = self.moves.round_gap(ramp, kid, self.st.ramp_lane_width_m)
             need = t + q.half_width / abs(across) + r_loop + c
             out = need if out is None else max(out, need)

@@ -39,7 +39,7 @@ from typing import Mapping
 import numpy as np
 
 from flyover.geometry.chains import Movements, ends, road_of, wrap
-from flyover.geometry.profile import climb_distance
+from flyover.geometry.profile import loop_radius
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
 
 __all__ = ["LevelPlan"]
@@ -237,11 +237,8 @@ class LevelPlan:
             return r if math.isfinite(r) else st.fit.inf_reference_m
 
         c = self.moves.round_gap(ramp, loop, st.ramp_lane_width_m)
-        # a loop that must climb farther than its turn is long is as big as a loop
-        # turning that length (its climb between its roads at its slope)
-        zs = zs or [0.0]
-        g = max(self.features[loop].slope_pct, 0.5) / 100.0
-        climb = float(climb_distance(max(zs) - min(zs), g, st.fit.transition_m))
-        r_loop = max(built(self.features[loop].radius_m), climb / (1.5 * math.pi))
+        zs = zs or [0.0]  # its climb between its roads
+        r_loop = loop_radius(built(self.features[loop].radius_m), max(zs) - min(zs),
+                             self.features[loop].slope_pct, st.fit.transition_m)
         return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
             + 0.5 * built(self.features[ramp].radius_m) + st.gap_m

@@ -35,8 +35,8 @@ import numpy as np
 
 from flyover.geometry.model import ElevationPoly
 
-__all__ = ["climb_distance", "heights", "required_grade", "elevation_polys",
-           "evaluate_polys", "max_grade"]
+__all__ = ["climb_distance", "parting_distance", "loop_radius", "heights", "required_grade",
+           "elevation_polys", "evaluate_polys", "max_grade"]
 
 
 def climb_distance(height: np.ndarray, grade: float, transition: float) -> np.ndarray:
@@ -44,6 +44,30 @@ def climb_distance(height: np.ndarray, grade: float, transition: float) -> np.nd
     h = np.abs(np.asarray(height, float))
     t = np.minimum(transition, h / grade)
     return np.where(h > 0, h / grade + t, 0.0)
+
+
+def parting_distance(grade: float, clearance: float, transition: float) -> float:
+    """How far two roads leaving (joining) one point must run before they are
+    ``clearance`` apart in height when they part at ``grade`` (the sum of their grades,
+    taken as at least 0.5 %), after a grade transition: the reach of a T terminal's
+    branch fence and of a fork's way out.
+
+    >>> parting_distance(0.08, 5.0, 40.0)
+    102.5
+    """
+    return clearance / max(grade, 0.005) + transition
+
+
+def loop_radius(radius: float, height: float, slope_pct: float, transition: float) -> float:
+    """The radius a loop of ``radius`` takes up when it must climb ``height`` at
+    ``slope_pct`` (taken as at least 0.5 %): a loop that must climb farther than its
+    three-quarter turn is long is as big as a loop turning that length.
+
+    >>> round(loop_radius(30.0, 7.0, 4.0, 40.0), 2), loop_radius(100.0, 7.0, 4.0, 40.0)
+    (45.62, 100.0)
+    """
+    g = max(slope_pct, 0.5) / 100.0
+    return max(radius, float(climb_distance(height, g, transition)) / (1.5 * math.pi))
 
 
 def _climb(s: np.ndarray, h: np.ndarray, grade: float, transition: float) -> np.ndarray:

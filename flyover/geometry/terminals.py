@@ -24,6 +24,7 @@ from typing import Mapping
 import numpy as np
 
 from flyover.geometry.chains import Movements, ends
+from flyover.geometry.profile import parting_distance
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
@@ -67,7 +68,7 @@ def terminal_fences(moves: Movements, features: Mapping[str, RampFeatures],
         if not siblings or ramp not in features:
             continue
         g = (features[ramp].slope_pct + min(features[k].slope_pct for k in siblings)) / 100.0
-        reach = st.fit.clearance_m / max(g, 0.005) + st.fit.transition_m
+        reach = parting_distance(g, st.fit.clearance_m, st.fit.transition_m)
         edge = road.lanes * st.lane_width_m
         straight = branches[ramp] in (Label.OUT_M, Label.IN_M)
         # the straight one keeps within the carriageway's edges (off the median: the
