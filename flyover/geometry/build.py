@@ -276,15 +276,18 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # fitted with the loop as an obstacle at every height and one more Bézier piece
             # to bow out with (without, then with its leads); if it cannot meet its targets
             # that way, it is fitted as any other ramp
+            # (a stub, Columbus's r1 round r6, also keeps out of where its child turns
+            # round the loop: :meth:`LoopRoom.connector_fences`)
             more = replace(spec, pieces=spec.pieces + 1)
+            edge = tuple(b.windows.loops.connector_fences(ramp))
             for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
-                kept = fit_ramp(again, b.obstacles(loops), st.fit, seed=rseed + n)
+                kept = fit_ramp(again, b.obstacles(loops, edge), st.fit, seed=rseed + n)
                 evals, secs = evals + kept.evaluations, secs + kept.seconds
                 if kept.ok and kept.conflicts == 0:
                     fit = kept
                     break
             else:  # then lifted a level and with the restarts of any other ramp
-                kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops)
+                kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops, edge)
                 evals, secs = evals + e2, secs + s2
                 if kept.ok and kept.conflicts == 0:
                     fit = kept

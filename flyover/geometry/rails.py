@@ -154,6 +154,16 @@ class AttachmentWindows:
                         hi = min(hi, t_min - st.gap_m, t_min - room)
                         if round_loop:
                             hi = min(hi, self.loops.round_loop(other, road, width, -1, feat))
+            for other in sorted(self.loops.round_loops(ramp)):
+                # an outer connector of a fitted loop not on this road (its chain reaches
+                # the loop's roads through stubs: Columbus's r11 onto I-270 North round r6)
+                # leaves (joins) it where it goes round the loop, as on a shared road
+                if road in {e[0] for e in moves.ends(other) if e is not None}:
+                    continue
+                if is_start:
+                    hi = min(hi, self.loops.round_loop(other, road, width, -1, feat))
+                else:
+                    lo = max(lo, self.loops.round_loop(other, road, width, +1, feat))
             if lo > hi - 1.0:  # no room left between the others: keep the side's order
                 lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
             # never beyond the carriageway's ends (a half line's, a T's terminal)
