@@ -277,9 +277,12 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # to bow out with (without, then with its leads); if it cannot meet its targets
             # that way, it is fitted as any other ramp
             # (a stub, Columbus's r1 round r6, also keeps out of where its child turns
-            # round the loop: :meth:`LoopRoom.connector_fences`)
+            # round the loop: :meth:`LoopRoom.connector_fences`; a connector with a child
+            # on its road's side, Columbus's r11 with r12, off that road's edge before its
+            # window: :func:`child_room_fences`)
             more = replace(spec, pieces=spec.pieces + 1)
-            edge = tuple(b.windows.loops.connector_fences(ramp))
+            edge = tuple(b.windows.loops.connector_fences(ramp)) + tuple(
+                child_room_fences(b.moves, b.width, st, spec))
             for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
                 kept = fit_ramp(again, b.obstacles(loops, edge), st.fit, seed=rseed + n)
                 evals, secs = evals + kept.evaluations, secs + kept.seconds
