@@ -366,3 +366,27 @@ def test_the_stub_a_round_connector_leaves_is_fitted_after_the_loop_and_keeps_it
     b.record("r1", fit)
     rail = b.windows.rail("r11", feats["r11"], ("I270N", L.IN_R), False, False, w11)
     assert rail.lo >= b.windows.loops.round_loop("r6", "I270N", w11, +1, feats["r11"]) - 1e-6
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_a_ramp_running_straight_on_between_two_ramps_is_sampled_without_a_radius():
+    """Columbus: r12 runs from the collector road r13's end, beside I-270 North, on into
+    r11 just before r11 joins I-270 North (real: 570 m, radius 1,066 m). A finite radius
+    target could be met on it only by a bend no real one has (30 m came out as 22-27 m on
+    2 of 8 drawn sets): sampling fixes it at inf, and resampling keeps it. No catalog
+    design has such a ramp."""
+    from flyover.geometry.feasibility import straight_connectors  # noqa: PLC0415
+    from flyover.geometry.tables import domain_resampler  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    assert straight_connectors(topo) == {"r12"}
+    assert fixed_features(topo)[("r12", Feature.RADIUS_M)] == float("inf")
+    assert not any(straight_connectors(t) for t in catalog_topologies().values())
+    sets = {0: ({}, {r: RampFeatures(float("inf") if r == "r12" else 60.0, 4.0)
+                     for r in topo.ramps}),
+            1: ({}, {r: RampFeatures(30.0, 3.0) if r != "r12" else RampFeatures(
+                float("inf"), 3.0) for r in topo.ramps})}
+    res = domain_resampler(sets, 7, topo)
+    assert all(res("r12", k, {}).radius_m == float("inf") for k in range(1, 6))

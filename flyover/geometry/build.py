@@ -282,7 +282,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # window: :func:`child_room_fences`)
             more = replace(spec, pieces=spec.pieces + 1)
             edge = tuple(b.windows.loops.connector_fences(ramp)) + tuple(
-                child_room_fences(b.moves, b.width, st, spec))
+                child_room_fences(b.moves, b.width, st, spec, b.fitted))
             for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
                 kept = fit_ramp(again, b.obstacles(loops, edge), st.fit, seed=rseed + n)
                 evals, secs = evals + kept.evaluations, secs + kept.seconds
@@ -296,7 +296,7 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
                     fit = kept
         fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
             terminal_fences(b.moves, b.features, st, ramp)) + tuple(
-            child_room_fences(b.moves, b.width, st, spec))
+            child_room_fences(b.moves, b.width, st, spec, b.fitted))
         room = () if fit is not None else b.fork_room(spec)
         if fit is None and (fences or room):
             # a loop whose outer connector leaves a fitted stub keeps off where that one

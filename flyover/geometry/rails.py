@@ -16,7 +16,9 @@ attachments) and the ramp's targets.
 * A cloverleaf's outer connector, which goes round the loop joining the same two
   roads, attaches where it clears every point of the loop turning at its target
   radius to 45° and running straight on
-  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`). On a collector-distributor
+  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`); so does one whose chain reaches
+  the loop's roads through stubs on a road the loop does not attach to (Columbus's ``r11``
+  joining I-270 North round ``r6``). On a collector-distributor
   road a loop attaches near the crossing, as on a road, and its outer connector where
   that rule clears the loop along the carriageway
   (:meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). A ramp joining a road after a loop leaves it, and not coming from the
