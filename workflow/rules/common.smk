@@ -207,7 +207,9 @@ def class_tables(stage):
 #     connector of a loop through stubs (Columbus's r1, r11 round r6) is fitted after that
 #     loop and keeps out of where its child turns round it (loop_room.connector_fences),
 #     and that connector leaves (joins) its road where it goes round the loop
-#     (rails.road_rail); catalog designs unchanged (no such stub or connector)
+#     (rails.road_rail) and keeps the child-room fence (beside.child_room_fences, out to a
+#     child's far end at a fitted stub's free end: r12 from r13); Columbus, 8 drawn sets:
+#     first try 94 -> 105/112, infeasible 8 -> 0 (with SAMPLING 7); catalog unchanged
 GEOMETRY_VERSION = 36
 
 
