@@ -58,9 +58,10 @@ class LoopRoom:
         a stub, everything within that room of the stub's free end and beyond it, away
         from the crossing (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their
         height: the layout keeps them out at every height, as a keep-out loop). The loop's
-        window there begins beyond it (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach back.
-        For a stub whose child goes round a fitted loop (:meth:`connector_fences`), where the
-        stub must not go."""
+        window there begins beyond it
+        (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach
+        back. For a stub whose child goes round a fitted loop (:meth:`connector_fences`),
+        where the stub must not go."""
         out = self.connector_fences(loop)
         for end, is_start in zip(ends(self.topo, loop), (True, False)):
             if end is None or end[0] not in self.roads:

@@ -21,7 +21,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from flyover.errors import InputFormatError
-from flyover.geometry.feasibility import LEVEL_SLOPE_PCT, RoundLoop, round_loops, straight_connectors
+from flyover.geometry.feasibility import (
+    LEVEL_SLOPE_PCT, RoundLoop, round_loops, straight_connectors,
+)
 from flyover.geometry.layout import Interchange, LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
