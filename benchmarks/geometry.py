@@ -89,8 +89,8 @@ def drawn_feature_sets(topology, profile, n, seed):
     out = {}
     for k in range(n):
         lanes = {r: int(rng.choice(profile["road"]["lanes"])) for r in topology.roads}
-        ramps = {r: RampFeatures(float(rng.choice(finite if r in turning
-                                                  else profile["ramp"]["radius_m"])),
+        ramps = {r: RampFeatures(float(fixed.get((r, Feature.RADIUS_M), rng.choice(
+                                     finite if r in turning else profile["ramp"]["radius_m"]))),
                                  float(fixed.get((r, Feature.SLOPE_PCT),
                                                  rng.choice(profile["ramp"]["slope_pct"]))))
                  for r in topology.ramps}

@@ -161,11 +161,15 @@ def test_an_outer_connector_reaching_its_loops_roads_through_stubs_is_fitted_rou
 
 
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
-def test_columbus_connector_goes_round_the_loop_off_the_collector_road():
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_columbus_connector_goes_round_the_loop_off_the_collector_road(seed):
     """Columbus: r11 (I-70 West through the stub r1 to I-270 North) is the outer connector
     of the loop r6 (I-270 North through r8 and r13 to I-70 West). It was fitted before r6,
     so r6 and r12 had to find room round it (r11 under r6, r12 meeting r11 or r2 at its
-    level). Now it goes round r6 and nothing meets anything at its level."""
+    level). Now it goes round r6 and nothing meets anything at its level, whatever the
+    seed: r1, which r11 leaves, is fitted after r6 and keeps out of where r11 turns round
+    it (with r8 carrying 3 lanes, r1 fitted first ended where r11 could not go round r6
+    on seed 0, and r11 went over it)."""
     from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: PLC0415
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
@@ -173,7 +177,7 @@ def test_columbus_connector_goes_round_the_loop_off_the_collector_road():
     feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
     feats["r13"] = RampFeatures(float("inf"), 0.0)  # level (fixed_features)
     feats["r11"] = RampFeatures(150.0, 4.0)  # wider than its loop (feasibility.RoundLoop)
-    g = build_interchange(topo, {}, feats).geometry
+    g = build_interchange(topo, {}, feats, seed=seed).geometry
     assert not {frozenset((c.ramp, c.other)) for c in ramp_crossings(g)} & {
         frozenset(("r11", "r6"))}
     assert not same_level_conflicts(g)
@@ -312,3 +316,77 @@ def test_no_catalog_design_gains_a_level_ramp():
     level = {name: sorted(level_ramps(t)) for name, t in catalog_topologies().items()}
     assert {n: v for n, v in level.items() if v} == {
         "cloverleaf_cd": ["cA1", "cA2", "cB1", "cB2"]}
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_a_stub_carries_all_the_lanes_of_the_ramps_it_splits_into():
+    """Columbus: r8 (off I-270 North) splits into r2 (one lane) and the collector road r13,
+    which splits into r6 and r12 (two lanes). r8 had one lane per ramp it splits into (2):
+    3 lanes out of 2, and r2's lane lay on one of r13's just past the fork (the dense check
+    found r13/r2 at 15 m on drawn set 4). Now it carries 3."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    moves = Movements(topo, layout_roads(topo, {}, LayoutSettings()))
+    assert {r: moves.lanes(r) for r in ("r8", "r13", "r1", "r10", "r14", "r2")} == {
+        "r8": 3, "r13": 2, "r1": 2, "r10": 2, "r14": 2, "r2": 1}
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_the_stub_a_round_connector_leaves_is_fitted_after_the_loop_and_keeps_its_room():
+    """Columbus: r1 (off I-70 West) splits into r11, the outer connector of the loop r6
+    joining I-70 West. r1 was fitted first, before r6 was anywhere, and where it ended
+    decided whether r11 could go round r6. Now r1 waits for r6 and, on I-70 West's right,
+    keeps out of everything beyond where r11 must leave the road to go round r6 at its
+    radius (the 45° rule, LoopRoom.round_loop); r11 joins I-270 North where it has gone
+    round r6 as well."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+    from flyover.topology.model import Label as L  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    feats["r13"] = RampFeatures(float("inf"), 0.0)
+    feats["r11"] = RampFeatures(150.0, 4.0)
+    b = LayoutState(topo, {}, feats, st, 0)
+    order = b.order()
+    assert order.index("r6") < order.index("r1") < order.index("r11")
+    assert b.windows.loops.connector_fences("r1") == []  # r6 not fitted yet
+    for ramp in order[: order.index("r1")]:
+        fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), 1)
+        b.record(ramp, fit)
+    w11 = b.width["r11"]
+    t_cap = b.windows.loops.round_loop("r6", "I70W", w11, -1, feats["r11"])
+    [fence] = b.windows.loops.connector_fences("r1")
+    assert fence[4] == pytest.approx(t_cap) and fence[5] > t_cap + 1e3  # beyond, toward r6
+    assert fence[7] < -b.roads["I70W"].lanes * st.lane_width_m  # on its right, off its lanes
+    fit, _, _ = _fit_with_levels(b, b.spec("r1", feats["r1"]), 1, fences=(fence,))
+    b.record("r1", fit)
+    rail = b.windows.rail("r11", feats["r11"], ("I270N", L.IN_R), False, False, w11)
+    assert rail.lo >= b.windows.loops.round_loop("r6", "I270N", w11, +1, feats["r11"]) - 1e-6
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_a_ramp_running_straight_on_between_two_ramps_is_sampled_without_a_radius():
+    """Columbus: r12 runs from the collector road r13's end, beside I-270 North, on into
+    r11 just before r11 joins I-270 North (real: 570 m, radius 1,066 m). A finite radius
+    target could be met on it only by a bend no real one has (30 m came out as 22-27 m on
+    2 of 8 drawn sets): sampling fixes it at inf, and resampling keeps it. No catalog
+    design has such a ramp."""
+    from flyover.geometry.feasibility import straight_connectors  # noqa: PLC0415
+    from flyover.geometry.tables import domain_resampler  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    assert straight_connectors(topo) == {"r12"}
+    assert fixed_features(topo)[("r12", Feature.RADIUS_M)] == float("inf")
+    assert not any(straight_connectors(t) for t in catalog_topologies().values())
+    sets = {0: ({}, {r: RampFeatures(float("inf") if r == "r12" else 60.0, 4.0)
+                     for r in topo.ramps}),
+            1: ({}, {r: RampFeatures(30.0, 3.0) if r != "r12" else RampFeatures(
+                float("inf"), 3.0) for r in topo.ramps})}
+    res = domain_resampler(sets, 7, topo)
+    assert all(res("r12", k, {}).radius_m == float("inf") for k in range(1, 6))

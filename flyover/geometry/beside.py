@@ -21,6 +21,8 @@ from __future__ import annotations
 import math
 from typing import Mapping
 
+import numpy as np
+
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import RampSpec
 from flyover.geometry.settings import LayoutSettings
@@ -30,12 +32,19 @@ __all__ = ["child_room_fences"]
 
 
 def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
-                      spec: RampSpec) -> list[tuple[float, ...]]:
+                      spec: RampSpec, fitted=None) -> list[tuple[float, ...]]:
     """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping the
     ramp of ``spec`` off the strip along its road's right edge, as wide as itself and its
     widest child attached on its left and 1 m, beyond its start window (leaving the road
     on the right, children leaving it on the left) or before its end window (joining on
-    the right, children joining it on the left). Empty for any other ramp and for stubs."""
+    the right, children joining it on the left). Empty for any other ramp and for stubs.
+
+    A child whose other end is the free end of a stub already fitted (``fitted``, the
+    :class:`flyover.geometry.fitted.FittedRamps`: Columbus's ``r12`` from the collector
+    road ``r13``'s end, beside I-270 North, into ``r11``) starts (ends) there, away from
+    the edge: the strip then reaches out to that end (its lane and 1 m beyond it), from
+    its station to the window (``r11``, fitted round the loop ``r6``, passed just beyond
+    ``r13``'s end and left ``r12`` no way north but a tight turn into it)."""
     ramp, g = spec.id, moves.g
     if moves.is_stub(ramp):
         return []
@@ -57,4 +66,31 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
         along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
         out.append((road.origin[0], road.origin[1], math.cos(road.heading),
                     math.sin(road.heading), *along, -edge - strip, -edge))
+        if fitted is not None:
+            out += _free_end_room(moves, width, fitted, road, edge, kids, rail, leaving)
+    return out
+
+
+def _free_end_room(moves, width, fitted, road, edge, kids, rail, leaving):
+    """The wider strips of :func:`child_room_fences` out to the children's far ends at a
+    fitted stub's free end."""
+    out = []
+    d = np.array([math.cos(road.heading), math.sin(road.heading)])
+    n = np.array([-d[1], d[0]])
+    for k in kids:
+        far = ends(moves.topo, k)[1 if leaving else 0]
+        if far is None or far[0] not in fitted.stations or not moves.is_stub(far[0]):
+            continue
+        p_start, p_end = ends(moves.topo, far[0])
+        if (p_start if leaving else p_end) is not None:
+            continue  # not where the stub is free
+        xy = fitted.stations[far[0]]["xy"][0 if leaving else -1] - np.array(road.origin)
+        t, out_m = float(xy @ d), float(-(xy @ n)) - edge
+        if out_m <= 0.0:
+            continue
+        along = (rail.hi, t) if leaving else (t, rail.lo)
+        if along[1] - along[0] < 1.0:
+            continue
+        out.append((road.origin[0], road.origin[1], d[0], d[1], *along,
+                    -edge - out_m - 0.5 * width[k] - 1.0, -edge))
     return out

@@ -276,21 +276,33 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             # fitted with the loop as an obstacle at every height and one more Bézier piece
             # to bow out with (without, then with its leads); if it cannot meet its targets
             # that way, it is fitted as any other ramp
+            # (a stub, Columbus's r1 round r6, also keeps out of where its child turns
+            # round the loop: :meth:`LoopRoom.connector_fences`; a connector with a child
+            # on its road's side, Columbus's r11 with r12, off that road's edge before its
+            # window: :func:`child_room_fences`)
+            # (if it cannot go round within the child's room, it goes round without it:
+            # a bridge over the loop is worse than a tight child)
             more = replace(spec, pieces=spec.pieces + 1)
-            for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
-                kept = fit_ramp(again, b.obstacles(loops), st.fit, seed=rseed + n)
-                evals, secs = evals + kept.evaluations, secs + kept.seconds
-                if kept.ok and kept.conflicts == 0:
-                    fit = kept
+            own = tuple(b.windows.loops.connector_fences(ramp))
+            edges = [own + tuple(child_room_fences(b.moves, b.width, st, spec, b.fitted))]
+            edges += [own] if edges[0] != own else []
+            for edge in edges:
+                for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
+                    kept = fit_ramp(again, b.obstacles(loops, edge), st.fit, seed=rseed + n)
+                    evals, secs = evals + kept.evaluations, secs + kept.seconds
+                    if kept.ok and kept.conflicts == 0:
+                        fit = kept
+                        break
+                else:  # then lifted a level and with the restarts of any other ramp
+                    kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops, edge)
+                    evals, secs = evals + e2, secs + s2
+                    if kept.ok and kept.conflicts == 0:
+                        fit = kept
+                if fit is not None:
                     break
-            else:  # then lifted a level and with the restarts of any other ramp
-                kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops)
-                evals, secs = evals + e2, secs + s2
-                if kept.ok and kept.conflicts == 0:
-                    fit = kept
         fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
             terminal_fences(b.moves, b.features, st, ramp)) + tuple(
-            child_room_fences(b.moves, b.width, st, spec))
+            child_room_fences(b.moves, b.width, st, spec, b.fitted))
         room = () if fit is not None else b.fork_room(spec)
         if fit is None and (fences or room):
             # a loop whose outer connector leaves a fitted stub keeps off where that one

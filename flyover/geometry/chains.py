@@ -181,10 +181,10 @@ class Movements:
         """Lanes of a ramp: a stub has one per ramp it splits into (is formed from)."""
         start, end = ends(self.topo, ramp)
         if end is None:
-            return max(1, sum(1 for _, _, d in self.g.out_edges(ramp, data=True)
+            return max(1, sum(self.lanes(v) for _, v, d in self.g.out_edges(ramp, data=True)
                               if d["label"].is_out))
         if start is None:
-            return max(1, sum(1 for _, _, d in self.g.in_edges(ramp, data=True)
+            return max(1, sum(self.lanes(u) for u, _, d in self.g.in_edges(ramp, data=True)
                               if not d["label"].is_out))
         return 1
 

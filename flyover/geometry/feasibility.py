@@ -99,7 +99,8 @@ from flyover.geometry.settings import LayoutSettings
 from flyover.sampling.model import ElementCondition, Feature, ForbidRule, Profile, Relation
 from flyover.topology.model import Kind, Topology
 
-__all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "fixed_features", "turning_ramps",
+__all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "straight_connectors",
+           "fixed_features", "turning_ramps",
            "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m"]
 
 #: the slope target of a level ramp (percent)
@@ -162,6 +163,28 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     return frozenset(out)
 
 
+def straight_connectors(topology: Topology) -> frozenset[str]:
+    """The ramps between two ramps that run straight on: both ends on ramps (no stub, no
+    collector-distributor road, no loop) and the roads their chain connects differ in
+    heading by less than :data:`TURNING_RAD` (Columbus I-70 / I-270's ``r12``, from the
+    collector road ``r13``'s end beside I-270 North into ``r11``, which joins I-270 North:
+    real, a 570 m ramp with a 1,066 m radius). No catalog design has one."""
+    g = topology.graph
+    roads = layout_roads(topology, {}, LayoutSettings())
+    moves = Movements(topology, roads)
+    out = set()
+    for ramp in topology.ramps:
+        start, end = _ends(topology, ramp)
+        if start is None or end is None or moves.is_loop(ramp) \
+                or g.nodes[start[0]]["kind"] is not Kind.RAMP \
+                or g.nodes[end[0]]["kind"] is not Kind.RAMP:
+            continue
+        turn = moves.movement(ramp)
+        if turn is not None and abs(turn) < TURNING_RAD:
+            out.add(ramp)
+    return frozenset(out)
+
+
 def fixed_features(topology: Topology) -> dict[tuple[str, Feature], float]:
     """The feature values geometry imposes on ``topology`` whatever the sample.
 
@@ -169,10 +192,15 @@ def fixed_features(topology: Topology) -> dict[tuple[str, Feature], float]:
     -------
     dict
         ``(element, feature) → value``: slope 0 for every level ramp
-        (:func:`level_ramps`). Sampling writes these values into every
-        feature row instead of covering them.
+        (:func:`level_ramps`) and radius ``inf`` for every ramp that runs straight on
+        between two ramps (:func:`straight_connectors`: it has no turn to hold a radius
+        on, and a finite target could be met only by a bend no real one has; Columbus's
+        ``r12`` missed 30 m as 22–27 m on 2 of 8 drawn sets). Sampling writes these
+        values into every feature row instead of covering them.
     """
-    return {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT for r in sorted(level_ramps(topology))}
+    out = {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT for r in sorted(level_ramps(topology))}
+    out.update({(r, Feature.RADIUS_M): math.inf for r in sorted(straight_connectors(topology))})
+    return out
 
 
 def turning_ramps(topology: Topology) -> frozenset[str]:

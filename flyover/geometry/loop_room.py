@@ -58,8 +58,11 @@ class LoopRoom:
         a stub, everything within that room of the stub's free end and beyond it, away
         from the crossing (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their
         height: the layout keeps them out at every height, as a keep-out loop). The loop's
-        window there begins beyond it (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach back."""
-        out = []
+        window there begins beyond it
+        (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach
+        back. For a stub whose child goes round a fitted loop (:meth:`connector_fences`),
+        where the stub must not go."""
+        out = self.connector_fences(loop)
         for end, is_start in zip(ends(self.topo, loop), (True, False)):
             if end is None or end[0] not in self.roads:
                 continue
@@ -77,6 +80,43 @@ class LoopRoom:
                 t = (t_max - 1e4, t_max + room) if p < pos else (t_min - room, t_min + 1e4)
                 out.append((r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading),
                             *t, *lat))
+        return out
+
+    def connector_fences(self, stub: str) -> list[tuple[float, ...]]:
+        """Where a stub on a road must not go so that its child, the outer connector of a
+        loop fitted before it (:meth:`flyover.geometry.chains.Movements.is_outer_connector`),
+        can go round that loop from (into) the stub's free end: on the stub's side of its
+        road, everything from where the connector must leave (join) the road to go round the
+        loop (:meth:`round_loop`, at the connector's radius and width) toward the loop, at
+        every height (Columbus's ``r1``, off I-70 West, whose child ``r11`` goes round the
+        loop ``r6`` joining I-70 West: ``r1``, fitted first, ended where ``r11`` could not
+        go round ``r6``, and ``r11`` was lifted over it). Empty for any other ramp."""
+        moves = self.moves
+        if not moves.is_stub(stub):
+            return []
+        start, end = ends(self.topo, stub)
+        fixed, is_start = (start, True) if start is not None else (end, False)
+        if fixed is None or fixed[0] not in self.roads:
+            return []
+        road, label = fixed
+        pos = self.g.edges[(road, stub) if is_start else (stub, road)].get("pos")
+        if pos is None:
+            return []
+        r, st = self.roads[road], self.st
+        edge = r.lanes * st.lane_width_m
+        lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+        out = []
+        for kid in moves.kids(stub):
+            if kid not in self.features:
+                continue
+            for p, _, _, loop, _ in self.fitted.attached.get(road, []):
+                if p == pos or not moves.is_outer_connector(kid, loop):
+                    continue
+                side = 1 if p < pos else -1  # the connector leaves after (before) the loop
+                t = self.round_loop(loop, road, self.fitted.width[kid], side, self.features[kid])
+                span = (t - 1e4, t) if side > 0 else (t, t + 1e4)
+                out.append((r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading),
+                            *span, *lat))
         return out
 
     def round_loops(self, ramp: str) -> frozenset[str]:

@@ -16,7 +16,9 @@ attachments) and the ramp's targets.
 * A cloverleaf's outer connector, which goes round the loop joining the same two
   roads, attaches where it clears every point of the loop turning at its target
   radius to 45° and running straight on
-  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`). On a collector-distributor
+  (:meth:`flyover.geometry.loop_room.LoopRoom.round_loop`); so does one whose chain reaches
+  the loop's roads through stubs on a road the loop does not attach to (Columbus's ``r11``
+  joining I-270 North round ``r6``). On a collector-distributor
   road a loop attaches near the crossing, as on a road, and its outer connector where
   that rule clears the loop along the carriageway
   (:meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). A ramp joining a road after a loop leaves it, and not coming from the
@@ -154,6 +156,16 @@ class AttachmentWindows:
                         hi = min(hi, t_min - st.gap_m, t_min - room)
                         if round_loop:
                             hi = min(hi, self.loops.round_loop(other, road, width, -1, feat))
+            for other in sorted(self.loops.round_loops(ramp)):
+                # an outer connector of a fitted loop not on this road (its chain reaches
+                # the loop's roads through stubs: Columbus's r11 onto I-270 North round r6)
+                # leaves (joins) it where it goes round the loop, as on a shared road
+                if road in {e[0] for e in moves.ends(other) if e is not None}:
+                    continue
+                if is_start:
+                    hi = min(hi, self.loops.round_loop(other, road, width, -1, feat))
+                else:
+                    lo = max(lo, self.loops.round_loop(other, road, width, +1, feat))
             if lo > hi - 1.0:  # no room left between the others: keep the side's order
                 lo, hi = (hi - st.stub_window_m, hi) if before else (lo, lo + st.stub_window_m)
             # never beyond the carriageway's ends (a half line's, a T's terminal)

@@ -139,14 +139,20 @@ class LayoutState:
         road with the loop it goes round (:meth:`Movements.goes_round`: it reaches the
         loop's roads through stubs) comes after that loop if the loop can come first, so
         that it is fitted round it (Columbus's ``r11`` round ``r6``, which leaves a stub
-        fitted in ``r11``'s round); on a shared road their windows keep them apart
-        (:meth:`AttachmentWindows.road_rail`)."""
+        fitted in ``r11``'s round), and so does the stub it leaves (joins), whose free end
+        then keeps the room the connector needs to go round the fitted loop
+        (:meth:`flyover.geometry.loop_room.LoopRoom.fences`: Columbus's ``r1``); on a
+        shared road their windows keep them apart (:meth:`AttachmentWindows.road_rail`)."""
         done: set[str] = set()
         out = []
         todo = list(self.topo.ramps)
         on = {r: {e[0] for e in ends(self.topo, r) if e and e[0] in self.roads} for r in todo}
         rounds = {r: [k for k in todo if self.moves.goes_round(r, k) and not on[r] & on[k]]
                   for r in todo}
+        for r in todo:  # a stub whose child goes round a loop so waits for that loop too
+            if self.moves.is_stub(r):
+                rounds[r] = sorted({k for c in self.moves.kids(r) if c in rounds
+                                    for k in rounds[c]})
         while todo:
             ready, waiting = [], []
             for r in todo:

@@ -21,7 +21,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from flyover.errors import InputFormatError
-from flyover.geometry.feasibility import LEVEL_SLOPE_PCT, RoundLoop, round_loops
+from flyover.geometry.feasibility import (
+    LEVEL_SLOPE_PCT, RoundLoop, round_loops, straight_connectors,
+)
 from flyover.geometry.layout import Interchange, LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.model import write_geometry
 from flyover.topology.model import Topology
@@ -110,8 +112,13 @@ class DomainResampler:
     seed: int
     finite: frozenset[str] = frozenset()
     rounds: tuple[RoundLoop, ...] = ()
+    #: ramps whose radius sampling fixes at ``inf`` (:func:`flyover.geometry.feasibility.
+    #: straight_connectors`): they keep it
+    straight: frozenset[str] = frozenset()
 
     def _radii(self, ramp: str, radii: Mapping[str, float] | None = None) -> tuple[float, ...]:
+        if ramp in self.straight:
+            return (math.inf,)
         out = self.radii
         if ramp in self.finite:
             out = tuple(r for r in out if math.isfinite(r))
@@ -174,9 +181,11 @@ def domain_resampler(feature_sets: Mapping[int, FeatureSet], seed: int,
     if any(math.isinf(r) for r in radii):
         finite = {r for r in names if all(math.isfinite(ramps[r].radius_m)
                                           for ramps in sets if r in ramps)}
+    straight = straight_connectors(topology) if topology is not None else frozenset()
     return DomainResampler(tuple(radii), tuple(slopes), frozenset(level), int(seed),
                            frozenset(finite),
-                           round_loops(topology, settings) if topology is not None else ())
+                           round_loops(topology, settings) if topology is not None else (),
+                           straight)
 
 
 def build_sample(topology: Topology, features: FeatureSet, *, class_id: str, sample: int,

@@ -202,7 +202,15 @@ def class_tables(stage):
 #     way its sibling needs, turning at its radius target until the two are a clearance
 #     apart in height (flyover.geometry.fork; turbine's left turns swung right across their
 #     sibling right turn's start: first try 898 -> 903/912, stack4 1,512 -> 1,518/1,536)
-GEOMETRY_VERSION = 35
+# 36: a stub carries all its children's lanes (Columbus's r8: 3, for r2 and the 2-lane
+#     collector r13; its r2 lay on one of r13's lanes); a stub whose child is the outer
+#     connector of a loop through stubs (Columbus's r1, r11 round r6) is fitted after that
+#     loop and keeps out of where its child turns round it (loop_room.connector_fences),
+#     and that connector leaves (joins) its road where it goes round the loop
+#     (rails.road_rail) and keeps the child-room fence (beside.child_room_fences, out to a
+#     child's far end at a fitted stub's free end: r12 from r13); Columbus, 8 drawn sets:
+#     first try 94 -> 105/112, infeasible 8 -> 0 (with SAMPLING 7); catalog unchanged
+GEOMETRY_VERSION = 36
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------

@@ -12,7 +12,9 @@
 # 6: a right turn by at most 90 degrees between two roads on one level without a planned
 #    crest is a level ramp, slope fixed at 0 (feasibility.level_ramps: DC's r14, fitted
 #    level, every slope drawn for it infeasible); catalog unchanged
-SAMPLING_VERSION = 6
+# 7: a ramp running straight on between two ramps (feasibility.straight_connectors:
+#    Columbus's r12) has its radius fixed at inf; catalog unchanged (no such ramp)
+SAMPLING_VERSION = 7
 
 
 rule sample_class:
