@@ -254,6 +254,24 @@ def _kept_within(b: LayoutState, spec: RampSpec, seed: int, **within
     return None, evals, secs
 
 
+@dataclass
+class _Spent:
+    """The search effort spent on one ramp, added up fit by fit."""
+
+    evals: int = 0
+    secs: float = 0.0
+
+    def __call__(self, result: tuple[RampFit | None, int, float]) -> RampFit | None:
+        """The fit of a ``(fit, evaluations, seconds)`` result, its effort counted."""
+        fit, evals, secs = result
+        self.evals, self.secs = self.evals + evals, self.secs + secs
+        return fit
+
+    def fit(self, fit: RampFit) -> RampFit:
+        """One search's fit, its effort counted."""
+        return self((fit, fit.evaluations, fit.seconds))
+
+
 def _build_once(topology: Topology, lanes: Mapping[str, int],
                 features: Mapping[str, RampFeatures], class_id: str, sample: int, seed: int,
                 st: LayoutSettings, resampler) -> Interchange:
@@ -266,113 +284,120 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
             raise GeometryError("no features for ramp", source=topology.source, element=ramp)
         feat = features[ramp]
         rseed = (seed * 1_000_003 + k * 7919) % (2**32)
-        spec = b.spec(ramp, feat)
-        built = _collector(b, ramp, spec) if b.moves.same_road(ramp) else None
-        fit, evals, secs = None, 0, 0.0
-        if built is not None and built.ok:
-            fit = built
-        elif loops := b.windows.loops.round_loops(ramp):
-            # a cloverleaf's outer connector goes round its loop, not over or under it:
-            # fitted with the loop as an obstacle at every height and one more Bézier piece
-            # to bow out with (without, then with its leads); if it cannot meet its targets
-            # that way, it is fitted as any other ramp
-            # (a stub, Columbus's r1 round r6, also keeps out of where its child turns
-            # round the loop: :meth:`LoopRoom.connector_fences`; a connector with a child
-            # on its road's side, Columbus's r11 with r12, off that road's edge before its
-            # window: :func:`child_room_fences`)
-            # (if it cannot go round within the child's room, it goes round without it:
-            # a bridge over the loop is worse than a tight child)
-            more = replace(spec, pieces=spec.pieces + 1)
-            own = tuple(b.windows.loops.connector_fences(ramp))
-            edges = [own + tuple(child_room_fences(b.moves, b.width, st, spec, b.fitted))]
-            edges += [own] if edges[0] != own else []
-            for edge in edges:
-                for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
-                    kept = fit_ramp(again, b.obstacles(loops, edge), st.fit, seed=rseed + n)
-                    evals, secs = evals + kept.evaluations, secs + kept.seconds
-                    if kept.ok and kept.conflicts == 0:
-                        fit = kept
-                        break
-                else:  # then lifted a level and with the restarts of any other ramp
-                    kept, e2, s2 = _fit_with_levels(b, more, rseed + 2, loops, edge)
-                    evals, secs = evals + e2, secs + s2
-                    if kept.ok and kept.conflicts == 0:
-                        fit = kept
-                if fit is not None:
-                    break
-        fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
-            terminal_fences(b.moves, b.features, st, ramp)) + tuple(
-            child_room_fences(b.moves, b.width, st, spec, b.fitted))
-        room = () if fit is not None else b.fork_room(spec)
-        if fit is None and (fences or room):
-            # a loop whose outer connector leaves a fitted stub keeps off where that one
-            # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
-            # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
-            # attaches on its road's side off that road's edge (:func:`child_room_fences`),
-            # the first of a stub's children out of its fork (into its join) off the way its
-            # sibling needs (:meth:`LayoutState.fork_room`); if it cannot meet its targets
-            # so, it is fitted as any other ramp
-            fit, e2, s2 = _kept_within(b, spec, rseed, fences=fences, approaches=room)
-            evals, secs = evals + e2, secs + s2
-        if fit is None and (ahead := b.approaches(ramp)):
-            # a direct left turn keeps off where those fitted after it climb from their
-            # fixed ends (:mod:`flyover.geometry.approaches`), at its planned level (lifted,
-            # it would be on theirs); if it cannot meet its targets so, it is fitted as any
-            # other ramp
-            fit, e2, s2 = _kept_within(b, spec, rseed, approaches=ahead, lift=False)
-            evals, secs = evals + e2, secs + s2
-        if fit is None:
-            fit, e2, s2 = _fit_with_levels(b, spec, rseed)
-            evals, secs = evals + e2, secs + s2
-            if not fit.ok and not _systematic(fit):  # held to where its parent is level:
-                loose = b.spec(ramp, feat, level=False)  # then anywhere not too steep
-                if _windows(loose) != _windows(spec):
-                    fit2, e2, s2 = _fit_with_levels(b, loose, rseed + 3)
-                    evals, secs = evals + e2, secs + s2
-                    fit = min([fit, fit2], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
-        if fit.conflicts:  # make way: refit the ramps it meets, then it again
-            fit, e2, s2 = _reroute(b, ramp, fit, rseed, outcomes)
-            evals, secs = evals + e2, secs + s2
+        spent = _Spent()
+        fit = _first_try(b, ramp, feat, rseed, outcomes, spent)
         first_ok = fit.ok
-        attempts, tried = 0, [fit]
-        while (not fit.ok and resampler is not None and attempts < st.max_resamples
-               and not _systematic(fit)):
-            attempts += 1
-            new = resampler(ramp, attempts, radii)
-            if new is None:
-                break
-            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + attempts)
-            evals += e2
-            secs += s2
-            tried.append(fit2)
-            fit = fit2
-        if not fit.ok:
-            fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))
-        if fit.conflicts and attempts:  # on the last targets too
-            fit, e2, s2 = _reroute(b, ramp, fit, rseed + attempts, outcomes)
-            evals, secs = evals + e2, secs + s2
-        # still crossing something at its level: a crossing is never acceptable, so draw
-        # targets that clear it soonest (the steepest slope of the domain)
-        clearing = getattr(resampler, "clearing", None)
-        k = 0
-        while fit.conflicts and clearing is not None and k < st.max_resamples:
-            k += 1
-            new = clearing(ramp, k, radii)
-            if new is None:
-                break
-            fit2, e2, s2 = _fit_with_levels(b, b.spec(ramp, new), rseed + 7 * k + 101)
-            evals, secs = evals + e2, secs + s2
-            if fit2.conflicts:
-                fit2, e2, s2 = _reroute(b, ramp, fit2, rseed + 7 * k + 102, outcomes)
-                evals, secs = evals + e2, secs + s2
-            attempts += 1
-            fit = min([fit, fit2], key=lambda f: (f.conflicts, not f.ok))
+        fit, attempts = _resampled(b, ramp, fit, rseed, radii, resampler, outcomes, spent)
         met = conflicts_with(fit, b.obstacles(), st.fit) if fit.conflicts else {}
         reason = "" if fit.ok else _reason(fit, met)
         b.record(ramp, fit)
         radii[ramp] = fit.spec.target_radius_m
-        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, evals, secs, feat))
+        outcomes.append(RampOutcome(ramp, fit, first_ok, attempts, reason, spent.evals,
+                                    spent.secs, feat))
     return Interchange(assemble(b, class_id, sample, seed, outcomes), tuple(outcomes))
+
+
+def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
+               outcomes: list[RampOutcome], spent: _Spent) -> RampFit:
+    """Steps 0–3 of the module's list on the sampled targets: the fit "the first try" is
+    counted on."""
+    spec = b.spec(ramp, feat)
+    built = _collector(b, ramp, spec) if b.moves.same_road(ramp) else None
+    fit = built if built is not None and built.ok else None
+    if fit is None and (loops := b.windows.loops.round_loops(ramp)):
+        fit = _round_fit(b, ramp, spec, loops, rseed, spent)
+    fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
+        terminal_fences(b.moves, b.features, b.st, ramp)) + tuple(
+        child_room_fences(b.moves, b.width, b.st, spec, b.fitted))
+    room = () if fit is not None else b.fork_room(spec)
+    if fit is None and (fences or room):
+        # a loop whose outer connector leaves a fitted stub keeps off where that one
+        # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
+        # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
+        # attaches on its road's side off that road's edge (:func:`child_room_fences`),
+        # the first of a stub's children out of its fork (into its join) off the way its
+        # sibling needs (:meth:`LayoutState.fork_room`); if it cannot meet its targets
+        # so, it is fitted as any other ramp
+        fit = spent(_kept_within(b, spec, rseed, fences=fences, approaches=room))
+    if fit is None and (ahead := b.approaches(ramp)):
+        # a direct left turn keeps off where those fitted after it climb from their
+        # fixed ends (:mod:`flyover.geometry.approaches`), at its planned level (lifted,
+        # it would be on theirs); if it cannot meet its targets so, it is fitted as any
+        # other ramp
+        fit = spent(_kept_within(b, spec, rseed, approaches=ahead, lift=False))
+    if fit is None:
+        fit = spent(_fit_with_levels(b, spec, rseed))
+        if not fit.ok and not _systematic(fit):  # held to where its parent is level:
+            loose = b.spec(ramp, feat, level=False)  # then anywhere not too steep
+            if _windows(loose) != _windows(spec):
+                fit2 = spent(_fit_with_levels(b, loose, rseed + 3))
+                fit = min([fit, fit2], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+    if fit.conflicts:  # make way: refit the ramps it meets, then it again
+        fit = spent(_reroute(b, ramp, fit, rseed, outcomes))
+    return fit
+
+
+def _round_fit(b: LayoutState, ramp: str, spec: RampSpec, loops: frozenset[str], rseed: int,
+               spent: _Spent) -> RampFit | None:
+    """A cloverleaf's outer connector round its loop, not over or under it: fitted with the
+    loop as an obstacle at every height and one more Bézier piece to bow out with (without,
+    then with its leads, then lifted a level with the restarts of any other ramp); the
+    first fit that meets its targets with no conflict, or ``None`` (it is then fitted as
+    any other ramp).
+
+    A stub (Columbus's r1 round r6) also keeps out of where its child turns round the loop
+    (:meth:`LoopRoom.connector_fences`), and a connector with a child on its road's side
+    (Columbus's r11 with r12) off that road's edge before its window
+    (:func:`child_room_fences`); if it cannot go round within the child's room, it goes
+    round without it: a bridge over the loop is worse than a tight child."""
+    more = replace(spec, pieces=spec.pieces + 1)
+    own = tuple(b.windows.loops.connector_fences(ramp))
+    edges = [own + tuple(child_room_fences(b.moves, b.width, b.st, spec, b.fitted))]
+    edges += [own] if edges[0] != own else []
+    for edge in edges:
+        for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
+            kept = spent.fit(fit_ramp(again, b.obstacles(loops, edge), b.st.fit, seed=rseed + n))
+            if kept.ok and kept.conflicts == 0:
+                return kept
+        kept = spent(_fit_with_levels(b, more, rseed + 2, loops, edge))
+        if kept.ok and kept.conflicts == 0:
+            return kept
+    return None
+
+
+def _resampled(b: LayoutState, ramp: str, fit: RampFit, rseed: int, radii: dict[str, float],
+               resampler, outcomes: list[RampOutcome], spent: _Spent) -> tuple[RampFit, int]:
+    """Step 4: a ramp that missed its first try, fitted on new targets from ``resampler``
+    (the fit with the fewest conflicts kept if none meets them); then, while it still meets
+    something at its level, on the resampler's ``clearing`` draws (the steepest slope: a
+    crossing is never acceptable). Returns the fit and the number of draws."""
+    st = b.st
+    attempts, tried = 0, [fit]
+    while (not fit.ok and resampler is not None and attempts < st.max_resamples
+           and not _systematic(fit)):
+        attempts += 1
+        new = resampler(ramp, attempts, radii)
+        if new is None:
+            break
+        fit = spent(_fit_with_levels(b, b.spec(ramp, new), rseed + attempts))
+        tried.append(fit)
+    if not fit.ok:
+        fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))
+    if fit.conflicts and attempts:  # on the last targets too
+        fit = spent(_reroute(b, ramp, fit, rseed + attempts, outcomes))
+    clearing = getattr(resampler, "clearing", None)
+    k = 0
+    while fit.conflicts and clearing is not None and k < st.max_resamples:
+        k += 1
+        new = clearing(ramp, k, radii)
+        if new is None:
+            break
+        fit2 = spent(_fit_with_levels(b, b.spec(ramp, new), rseed + 7 * k + 101))
+        if fit2.conflicts:
+            fit2 = spent(_reroute(b, ramp, fit2, rseed + 7 * k + 102, outcomes))
+        attempts += 1
+        fit = min([fit, fit2], key=lambda f: (f.conflicts, not f.ok))
+    return fit, attempts
 
 
 def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
