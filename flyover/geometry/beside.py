@@ -19,20 +19,37 @@ it: stubs get none.
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
 from flyover.geometry.chains import Movements, ends
-from flyover.geometry.fit import RampSpec
+from flyover.geometry.fit import Rail, RampSpec
+from flyover.geometry.roads import RoadLine
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label
+
+if TYPE_CHECKING:
+    from flyover.geometry.fitted import FittedRamps
 
 __all__ = ["child_room_fences"]
 
 
+@dataclass(frozen=True)
+class _Side:
+    """Where a ramp meets its road, with children attached on the side facing that road."""
+
+    road: RoadLine
+    edge: float  #: the road's right edge, metres right of its reference line (+ 0.5 m)
+    rail: Rail  #: the ramp's window on the road
+    leaving: bool  #: the ramp leaves the road (else joins it)
+    kids: tuple[str, ...]
+
+
 def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
-                      spec: RampSpec, fitted=None) -> list[tuple[float, ...]]:
+                      spec: RampSpec, fitted: FittedRamps | None = None
+                      ) -> list[tuple[float, ...]]:
     """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping the
     ramp of ``spec`` off the strip along its road's right edge, as wide as itself and its
     widest child attached on its left and 1 m, beyond its start window (leaving the road
@@ -61,23 +78,25 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
         if not kids:
             continue
         road = moves.roads[end[0]]
-        edge = road.lanes * st.lane_width_m + 0.5
+        side = _Side(road, road.lanes * st.lane_width_m + 0.5, rail, leaving, tuple(kids))
         strip = max(width[k] for k in kids) + 1.0  # the fit widens it by the ramp's half width
         along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
         out.append((road.origin[0], road.origin[1], math.cos(road.heading),
-                    math.sin(road.heading), *along, -edge - strip, -edge))
+                    math.sin(road.heading), *along, -side.edge - strip, -side.edge))
         if fitted is not None:
-            out += _free_end_room(moves, width, fitted, road, edge, kids, rail, leaving)
+            out += _free_end_room(moves, width, fitted, side)
     return out
 
 
-def _free_end_room(moves, width, fitted, road, edge, kids, rail, leaving):
+def _free_end_room(moves: Movements, width: Mapping[str, float], fitted: FittedRamps,
+                   side: _Side) -> list[tuple[float, ...]]:
     """The wider strips of :func:`child_room_fences` out to the children's far ends at a
     fitted stub's free end."""
     out = []
+    road, edge, leaving = side.road, side.edge, side.leaving
     d = np.array([math.cos(road.heading), math.sin(road.heading)])
     n = np.array([-d[1], d[0]])
-    for k in kids:
+    for k in side.kids:
         far = ends(moves.topo, k)[1 if leaving else 0]
         if far is None or far[0] not in fitted.stations or not moves.is_stub(far[0]):
             continue
@@ -88,7 +107,7 @@ def _free_end_room(moves, width, fitted, road, edge, kids, rail, leaving):
         t, out_m = float(xy @ d), float(-(xy @ n)) - edge
         if out_m <= 0.0:
             continue
-        along = (rail.hi, t) if leaving else (t, rail.lo)
+        along = (side.rail.hi, t) if leaving else (t, side.rail.lo)
         if along[1] - along[0] < 1.0:
             continue
         out.append((road.origin[0], road.origin[1], d[0], d[1], *along,
