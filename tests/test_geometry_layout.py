@@ -647,8 +647,8 @@ def test_a_child_on_the_side_facing_its_parents_road_attaches_where_there_is_roo
     # squeezes r2 in beside R4
     from flyover.geometry import build  # noqa: PLC0415
 
-    monkeypatch.setattr(rails.AttachmentWindows, "room_beside",
-                        lambda self, parent, off, width, lo, hi: (lo, hi))
+    monkeypatch.setattr(rails, "room_beside",
+                        lambda fitted, clearance, parent, off, width, lo, hi: (lo, hi))
     monkeypatch.setattr(build, "child_room_fences", lambda *a: [])
     squeezed = build_interchange(t, {r: 5 for r in t.roads}, feats, seed=3653403231, settings=st)
     assert {o.ramp for o in squeezed.outcomes if o.fit.conflicts} == {"r2"}
@@ -689,8 +689,8 @@ def test_a_ramp_attached_to_a_ramp_attaches_where_its_parent_is_level(monkeypatc
 
     _restarts_before_the_dubins_guess(monkeypatch)
 
-    monkeypatch.setattr(rails.AttachmentWindows, "level_part",
-                        lambda self, parent, lo, hi, limit=None: (lo, hi))
+    monkeypatch.setattr(rails, "level_part",
+                        lambda fitted, parent, lo, hi, limit=None: (lo, hi))
     monkeypatch.setattr(build, "child_room_fences", lambda *a: [])
     anywhere = build_interchange(t, {r: 3 for r in t.roads}, feats, seed=4, settings=st)
     g = anywhere.geometry

@@ -3,7 +3,7 @@
 J1's r3 joins R4 on the right and r2 joins r3 on the left: r2 comes in between r3 and R4.
 Fitted on its own, r3 turns early and runs along R4's edge to its merge, so nowhere
 between leaving R2 and that run is there room beside it at its level for r2
-(:meth:`flyover.geometry.rails.AttachmentWindows.room_beside` then found only a few
+(:func:`flyover.geometry.rails.room_beside` then found only a few
 metres of r3's start, low beside R2: r2 had to cross R1/R2 and drop into it, and met
 them or missed its radius). Mirrored, r1 leaves R1 on the right and r2 leaves r1 on the
 left. :func:`child_room_fences` keeps such a ramp a child's lane (and 1 m) off its road's

@@ -33,7 +33,7 @@ and the ramps already fitted:
    for a ramp between two windows, from the shortest Dubins path between them at
    its radius target, :mod:`flyover.geometry.guess`); a
    ramp attached to a ramp is first held to where its parent is level
-   (:meth:`flyover.geometry.rails.AttachmentWindows.level_part`; else where its
+   (:func:`flyover.geometry.rails.level_part`; else where its
    parent is no steeper than its slope target) and, if it misses its targets
    there, fitted so again anywhere in its windows where its parent is no steeper;
 3. one that still meets fitted ramps at its level makes way (rip-up and

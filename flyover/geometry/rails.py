@@ -64,7 +64,7 @@ from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
 __all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M", "beyond_continuation",
-           "clear_of_others"]
+           "clear_of_others", "level_part", "room_beside"]
 
 #: the largest grade of a parent ramp (a fraction) at which a child may attach to it
 LEVEL_GRADE = 0.003
@@ -91,7 +91,7 @@ class AttachmentWindows:
         """The rail of one end (``end`` = ``(parent, label)``) of ``ramp``; on a road, no
         farther than ``bound`` beyond the room it keeps from the crossing; on a ramp,
         where that ramp is level if ``level`` and it can, else where it is no steeper than
-        ``feat``'s slope target if it can (:meth:`level_part`)."""
+        ``feat``'s slope target if it can (:func:`level_part`)."""
         node, label = end
         if node in self.roads:
             pos = self.g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
@@ -231,79 +231,16 @@ class AttachmentWindows:
                 lo, hi = 0.15 * length, 0.6 * length
             else:
                 lo, hi = 0.4 * length, 0.85 * length
-            lo, hi = self.room_beside(parent, off, width, lo, hi)
+            lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
+                                 lo, hi)
             for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
-                part = self.level_part(parent, lo, hi, limit)
+                part = level_part(self.fitted, parent, lo, hi, limit)
                 if part is not None:
                     lo, hi = part
                     break
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
-
-    def level_part(self, parent: str, lo: float, hi: float,
-                   limit: float = LEVEL_GRADE) -> tuple[float, float] | None:
-        """The part of ``lo..hi`` on a fitted parent where its grade is at most ``limit``
-        (:data:`LEVEL_GRADE`: where it is level); ``None`` when no such run of stations
-        overlaps it.
-
-        A ramp leaving or joining its parent on a grade starts or ends at that grade
-        (:mod:`flyover.geometry.profile`; until they did, one leaving its parent on the
-        parent's climb started 4 pp flatter than the lane it shared there, J1's r2 leaving
-        r1); it reads best where the parent is level, and its own slope target holds only
-        where the parent is no steeper. The window becomes the run of such stations that
-        overlaps it most; unchanged when it is within the limit throughout (moving the
-        window to the nearest level run instead, when none overlaps, cost 50 % more CPU
-        on J1 for one jump fewer in 24)."""
-        st = self.fitted.stations[parent]
-        s, z = st["s"], st["z"]
-        if len(s) < 2:
-            return lo, hi
-        level = np.abs(np.gradient(z, s)) <= limit
-        inside = (s >= lo) & (s <= hi)
-        if level[inside].all():
-            return lo, hi
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], level.astype(int), [0]])))
-        runs = [(max(lo, s[a]), min(hi, s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
-        runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
-        if not runs:
-            return None
-        a, b = max(runs, key=lambda r: r[1] - r[0])
-        return float(a), float(b)
-
-    def room_beside(self, parent: str, off: float, width: float, lo: float,
-                    hi: float) -> tuple[float, float]:
-        """The part of ``lo..hi`` on a fitted parent where a child ``width`` wide, beside it
-        at ``off``, is clear of the roads at its level.
-
-        A ramp that joins a road runs along its edge for a while (and one that leaves a
-        road starts along it): a child on the side facing that road has no room there,
-        whatever its shape (J1's r2 joins r3 on the left, between r3 and R4). When some
-        stations of ``lo..hi`` lack that room, the window becomes the run of stations
-        with room (within 5..95 % of the parent) that overlaps it most, else the longest;
-        unchanged when every station has room or none has."""
-        st = self.fitted.stations[parent]
-        s, xy, head, z = st["s"], st["xy"], st["heading"], st["z"]
-        left = np.stack([-np.sin(head), np.cos(head)], -1)
-        clear = np.ones(len(s), bool)
-        for k in np.linspace(off - width + 0.5, off + 1.0, 5):  # across the child's lane
-            q = xy + k * left
-            for x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, zr in self.fitted.bands:
-                rel = q - (x0, y0)
-                along, lat = rel @ (dx, dy), rel @ (-dy, dx)
-                clear &= ~((along >= t_lo) & (along <= t_hi) & (lat >= lat_lo) & (lat <= lat_hi)
-                           & (np.abs(z - zr) < self.st.fit.clearance_m))
-        inside = (s >= lo) & (s <= hi)
-        if clear[inside].all() or not clear.any():
-            return lo, hi
-        length = s[-1]
-        ok = clear & (s >= 0.05 * length) & (s <= 0.95 * length)
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-        runs = [(s[a], s[b - 1]) for a, b in zip(edges[::2], edges[1::2]) if b - 1 > a]
-        if not runs:
-            return lo, hi
-        a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
-        return float(a), float(b)
 
 
 def beyond_continuation(moves: Movements, st: LayoutSettings, road: str, ramp: str,
@@ -375,3 +312,68 @@ def clear_of_others(fitted: FittedRamps, st: LayoutSettings, road: str, ramp: st
         if best is None or key < best[0]:
             best = (key, cand)
     return best[1] if best else (lo, hi)
+
+
+def level_part(fitted: FittedRamps, parent: str, lo: float, hi: float,
+               limit: float = LEVEL_GRADE) -> tuple[float, float] | None:
+    """The part of ``lo..hi`` on a fitted parent where its grade is at most ``limit``
+    (:data:`LEVEL_GRADE`: where it is level); ``None`` when no such run of stations
+    overlaps it.
+
+    A ramp leaving or joining its parent on a grade starts or ends at that grade
+    (:mod:`flyover.geometry.profile`; until they did, one leaving its parent on the
+    parent's climb started 4 pp flatter than the lane it shared there, J1's r2 leaving
+    r1); it reads best where the parent is level, and its own slope target holds only
+    where the parent is no steeper. The window becomes the run of such stations that
+    overlaps it most; unchanged when it is within the limit throughout (moving the
+    window to the nearest level run instead, when none overlaps, cost 50 % more CPU
+    on J1 for one jump fewer in 24)."""
+    st = fitted.stations[parent]
+    s, z = st["s"], st["z"]
+    if len(s) < 2:
+        return lo, hi
+    level = np.abs(np.gradient(z, s)) <= limit
+    inside = (s >= lo) & (s <= hi)
+    if level[inside].all():
+        return lo, hi
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], level.astype(int), [0]])))
+    runs = [(max(lo, s[a]), min(hi, s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
+    runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
+    if not runs:
+        return None
+    a, b = max(runs, key=lambda r: r[1] - r[0])
+    return float(a), float(b)
+
+def room_beside(fitted: FittedRamps, clearance: float, parent: str, off: float, width: float,
+                lo: float, hi: float) -> tuple[float, float]:
+    """The part of ``lo..hi`` on a fitted parent where a child ``width`` wide, beside it
+    at ``off``, is clear of the roads at its level.
+
+    A ramp that joins a road runs along its edge for a while (and one that leaves a
+    road starts along it): a child on the side facing that road has no room there,
+    whatever its shape (J1's r2 joins r3 on the left, between r3 and R4). When some
+    stations of ``lo..hi`` lack that room, the window becomes the run of stations
+    with room (within 5..95 % of the parent) that overlaps it most, else the longest;
+    unchanged when every station has room or none has."""
+    st = fitted.stations[parent]
+    s, xy, head, z = st["s"], st["xy"], st["heading"], st["z"]
+    left = np.stack([-np.sin(head), np.cos(head)], -1)
+    clear = np.ones(len(s), bool)
+    for k in np.linspace(off - width + 0.5, off + 1.0, 5):  # across the child's lane
+        q = xy + k * left
+        for x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi, zr in fitted.bands:
+            rel = q - (x0, y0)
+            along, lat = rel @ (dx, dy), rel @ (-dy, dx)
+            clear &= ~((along >= t_lo) & (along <= t_hi) & (lat >= lat_lo) & (lat <= lat_hi)
+                       & (np.abs(z - zr) < clearance))
+    inside = (s >= lo) & (s <= hi)
+    if clear[inside].all() or not clear.any():
+        return lo, hi
+    length = s[-1]
+    ok = clear & (s >= 0.05 * length) & (s <= 0.95 * length)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    runs = [(s[a], s[b - 1]) for a, b in zip(edges[::2], edges[1::2]) if b - 1 > a]
+    if not runs:
+        return lo, hi
+    a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
+    return float(a), float(b)

@@ -58,7 +58,7 @@ class RampSpecs:
     def spec(self, ramp: str, feat: RampFeatures, level: bool = True) -> RampSpec:
         """The spec of ``ramp`` for targets ``feat``; ``level``: an end on a ramp attaches
         where that ramp is level, if it can (else, and with ``level`` False, where it is no
-        steeper than the slope target: :meth:`flyover.geometry.rails.AttachmentWindows.level_part`)."""
+        steeper than the slope target: :func:`flyover.geometry.rails.level_part`)."""
         start, end = ends(self.topo, ramp)
         width = self.fitted.width[ramp]
         st, plan = self.st, self.levels.crests
