@@ -390,3 +390,31 @@ def test_a_ramp_running_straight_on_between_two_ramps_is_sampled_without_a_radiu
                 float("inf"), 3.0) for r in topo.ramps})}
     res = domain_resampler(sets, 7, topo)
     assert all(res("r12", k, {}).radius_m == float("inf") for k in range(1, 6))
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_stubs_keep_room_for_the_connector_climbing_between_their_free_ends():
+    """Columbus: r2 runs from the stub r8's free end (0.5 m, under I-70) to the stub r14's
+    (12 m, where r9 comes down from its crest), a low connector without a crest. The two
+    free ends kept room for its turn alone: 544-549 m of least path for 1,190 m of climb
+    at 1 % (drawn sets 4-6), and r2 came out at its least, 2.1-2.2 % steep. Now each free
+    end keeps half its climb from the crossing, whatever the seed."""
+    from flyover.geometry.profile import climb_distance  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    feats["r13"] = RampFeatures(float("inf"), 0.0)  # level (fixed_features)
+    feats["r2"] = RampFeatures(60.0, 1.0)
+    b = LayoutState(topo, {}, feats, st, 0)
+    fe = b.specs.free_ends
+    assert (fe.stub_free_z("r8"), fe.stub_free_z("r14")) == pytest.approx((0.5, 12.0))
+    climb = float(climb_distance(11.5, 0.01, st.fit.transition_m))
+    assert fe.connector_room("r14", 12.0) == pytest.approx(0.5 * climb)
+    for seed, ramp in enumerate(("r14", "r8")):
+        fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), seed)
+        b.record(ramp, fit)
+    assert b.spec("r2", feats["r2"]).least_m >= 0.75 * climb
+    # a connector between two stubs at one height keeps no such room
+    assert fe.connector_room("r14", 0.5) == pytest.approx(0.0)

@@ -346,3 +346,25 @@ def test_columbus_connector_round_its_loop_through_stubs_is_sampled_wider():
     held = {(radius[k, "r11"], radius[k, "r6"]) for k in range(s.coverage.rows)}
     assert all(pair.allows(a, b) for a, b in held)
     assert any(b >= 40.0 for _, b in held)  # the loop still takes wide radii
+
+
+def test_fixed_features_lay_out_the_roads_once(monkeypatch, cloverleaf_cd):
+    """``fixed_features`` reads the level ramps and the straight connectors off one road
+    layout: each used to lay the roads out (and build their ``Movements``) on its own."""
+    import flyover.geometry.feasibility as feasibility  # noqa: PLC0415
+
+    calls = []
+    real = feasibility.layout_roads
+
+    def counted(*args, **kwargs):
+        calls.append(args[0].name)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(feasibility, "layout_roads", counted)
+    for name, topo in catalog_topologies().items():
+        calls.clear()
+        fixed = fixed_features(topo)
+        assert len(calls) == 1, name
+        assert fixed == {**{(r, Feature.SLOPE_PCT): 0.0 for r in level_ramps(topo)},
+                         **{(r, Feature.RADIUS_M): math.inf
+                            for r in feasibility.straight_connectors(topo)}}

@@ -110,7 +110,14 @@ LEVEL_SLOPE_PCT = 0.0
 TURNING_RAD = 0.5
 
 
-def level_ramps(topology: Topology) -> frozenset[str]:
+def _movements(topology: Topology, settings: LayoutSettings | None = None) -> Movements:
+    """The ramps' kinds on the road layout of :mod:`flyover.geometry.roads` with no lanes
+    or slopes (it does not depend on the sample): what every rule here reads."""
+    st = settings or LayoutSettings()
+    return Movements(topology, layout_roads(topology, {}, st))
+
+
+def level_ramps(topology: Topology, moves: Movements | None = None) -> frozenset[str]:
     """The ramps the layout necessarily keeps level: both ends on one road, a ramp
     between two expressways that continue one another (on one line, one level:
     :func:`flyover.geometry.chains.continuations`), a collector road's second stub (:meth:`flyover.geometry.levels.LevelPlan.continues_level`,
@@ -123,6 +130,8 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     ----------
     topology
         The interchange topology.
+    moves
+        Its ramps' kinds (:func:`_movements`), if already at hand.
 
     Returns
     -------
@@ -144,8 +153,8 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     # a ramp from an expressway to one it continues runs along their line, on their level
     out |= {ramp for c in continuations(topology) for ramp in c.ramps}
     st = LayoutSettings()
-    roads = layout_roads(topology, {}, st)
-    moves = Movements(topology, roads)
+    moves = moves or _movements(topology, st)
+    roads = moves.roads
     plan = LevelPlan(moves, {}, st)
     # a collector road's second stub goes on level
     out |= {ramp for ramp in stubs if plan.continues_level(ramp)}
@@ -163,15 +172,15 @@ def level_ramps(topology: Topology) -> frozenset[str]:
     return frozenset(out)
 
 
-def straight_connectors(topology: Topology) -> frozenset[str]:
+def straight_connectors(topology: Topology, moves: Movements | None = None) -> frozenset[str]:
     """The ramps between two ramps that run straight on: both ends on ramps (no stub, no
     collector-distributor road, no loop) and the roads their chain connects differ in
     heading by less than :data:`TURNING_RAD` (Columbus I-70 / I-270's ``r12``, from the
     collector road ``r13``'s end beside I-270 North into ``r11``, which joins I-270 North:
-    real, a 570 m ramp with a 1,066 m radius). No catalog design has one."""
+    real, a 570 m ramp with a 1,066 m radius). No catalog design has one. ``moves``: its
+    ramps' kinds (:func:`_movements`), if already at hand."""
     g = topology.graph
-    roads = layout_roads(topology, {}, LayoutSettings())
-    moves = Movements(topology, roads)
+    moves = moves or _movements(topology)
     out = set()
     for ramp in topology.ramps:
         start, end = _ends(topology, ramp)
@@ -198,8 +207,11 @@ def fixed_features(topology: Topology) -> dict[tuple[str, Feature], float]:
         ``r12`` missed 30 m as 22–27 m on 2 of 8 drawn sets). Sampling writes these
         values into every feature row instead of covering them.
     """
-    out = {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT for r in sorted(level_ramps(topology))}
-    out.update({(r, Feature.RADIUS_M): math.inf for r in sorted(straight_connectors(topology))})
+    moves = _movements(topology)  # the roads laid out once for both rules
+    out = {(r, Feature.SLOPE_PCT): LEVEL_SLOPE_PCT
+           for r in sorted(level_ramps(topology, moves))}
+    out.update({(r, Feature.RADIUS_M): math.inf
+                for r in sorted(straight_connectors(topology, moves))})
     return out
 
 

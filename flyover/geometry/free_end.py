@@ -59,28 +59,15 @@ class FreeEnds:
         side = fixed[1].side
         sgn = -1.0 if side == "right" else (1.0 if side == "left" else 0.0)
         lat = (sorted((sgn * 3.0, sgn * 40.0)) if sgn else (-10.0, 10.0))
-        past = None
-        if end is None:  # split stub: free end
-            z0 = fitted.end_z(start)
-            zf = self.levels.stub_z(ramp, z0, z0 + (self._goal_z(ramp, True) - z0) / 3.0)
-            past = self.loop_room(ramp, start)
-            zq = self.levels.loop_road_z(ramp)
-            if zq is not None and self.levels.continues_level(ramp):
-                # a collector road under (over) it: on at its parent's height there
-                at = fitted.stations[start[0]]
-                zf = float(np.interp(fitted.start_s(ramp, start), at["s"], at["z"]))
-            elif zq is not None:  # its chain passes under (over) that road first
-                clear = st.fit.clearance_m + Z_MARGIN
-                zf = min(zf, zq - clear) if zq > z0 else max(zf, zq + clear)
-        else:
-            z1 = fitted.end_z(end)
-            zf = self.levels.stub_z(ramp, z1, z1 + (self._goal_z(ramp, False) - z1) / 3.0)
+        past = self.loop_room(ramp, start) if end is None else None
+        zf = self.free_z(ramp, start, end)
         # the free end is far enough out for the stub to climb to it at its slope
         z_fix = fitted.end_z(start or end)
         g = max(feat.slope_pct, 0.5) / 100.0
         climb = float(climb_distance(zf - z_fix, g, st.fit.transition_m)) + 60.0
         free = FreeEnd((60.0, max(400.0, climb)), lat, (-np.pi / 4, np.pi / 4), zf)
-        stub_extra = self.levels.kids_room(self.moves.kids(ramp), zf)
+        stub_extra = max(self.levels.kids_room(self.moves.kids(ramp), zf),
+                         self.connector_room(ramp, zf))
         if stub_extra > 0:  # the free end keeps that room from the crossing
             free = replace(free, forward=(60.0, max(250.0, climb)))
             stub_extra += free.forward[1]
@@ -93,6 +80,70 @@ class FreeEnds:
         if start is not None and start[0] not in self.roads:  # a split of a split
             free = replace(free, lateral=self.beside_road(ramp, start, free, width))
         return free, stub_extra
+
+    def free_z(self, ramp: str, start, end) -> float:
+        """The height of the free end of the stub ``ramp`` (one of ``start``, ``end`` is
+        ``None``): a third of the way from its fixed end toward its children's roads, or
+        the clearance toward its planned children's crest
+        (:meth:`flyover.geometry.levels.LevelPlan.stub_z`); under (over) the road a loop
+        of its chain goes to, and a collector road's second stub at its parent's height."""
+        st, fitted = self.st, self.fitted
+        if end is None:  # split stub: free end
+            z0 = fitted.end_z(start)
+            zf = self.levels.stub_z(ramp, z0, z0 + (self._goal_z(ramp, True) - z0) / 3.0)
+            zq = self.levels.loop_road_z(ramp)
+            if zq is not None and self.levels.continues_level(ramp):
+                # a collector road under (over) it: on at its parent's height there
+                at = fitted.stations[start[0]]
+                zf = float(np.interp(fitted.start_s(ramp, start), at["s"], at["z"]))
+            elif zq is not None:  # its chain passes under (over) that road first
+                clear = st.fit.clearance_m + Z_MARGIN
+                zf = min(zf, zq - clear) if zq > z0 else max(zf, zq + clear)
+            return zf
+        z1 = fitted.end_z(end)
+        return self.levels.stub_z(ramp, z1, z1 + (self._goal_z(ramp, False) - z1) / 3.0)
+
+    def stub_free_z(self, stub: str) -> float | None:
+        """The height of the free end of ``stub``: its fit's, once fitted, else where
+        :meth:`free_z` puts it if its fixed end is on a road (that needs no fit); ``None``
+        for a ramp that is no stub, or a stub on a ramp not fitted yet."""
+        start, end = ends(self.topo, stub)
+        if (start is None) == (end is None):
+            return None
+        fit = self.fitted.fits.get(stub)
+        if fit is not None:
+            return float(fit.end_pose[3] if end is None else fit.start_pose[3])
+        if (start or end)[0] not in self.roads:
+            return None
+        return float(self.free_z(stub, start, end))
+
+    def connector_room(self, ramp: str, zf: float) -> float:
+        """Room (m) the free end of the stub ``ramp`` (at height ``zf``) keeps from the
+        crossing for a child that runs from it to another stub's free end without a
+        planned crest (:meth:`flyover.geometry.levels.LevelPlan.low_connector`): half that
+        child's climb between the two free ends at its slope target, the other stub
+        keeping the other half, so that the two free ends lie as far apart as it needs to
+        climb. With room for its turn alone (``turn_room`` times its radius) OSM Columbus's
+        ``r2``, from ``r8``'s free end at 0.5 m to ``r14``'s at 12 m, had 544-549 m between
+        them (its least, 60 and 150 m targets) for 1,190 m of climb at 1 %: it came out at
+        its least, 2.1-2.2 % steep. 0 if there is none."""
+        out = 0.0
+        for kid in self.moves.kids(ramp):
+            if kid not in self.levels.features or not self.levels.low_connector(kid):
+                continue
+            for other, at_start in zip(ends(self.topo, kid), (True, False)):
+                if other is None or other[0] == ramp:
+                    continue
+                o_start, o_end = ends(self.topo, other[0])
+                if (o_end if at_start else o_start) is not None:
+                    continue  # not at that ramp's free end
+                z = self.stub_free_z(other[0])
+                if z is None:
+                    continue
+                g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
+                climb = float(climb_distance(abs(z - zf), g, self.st.fit.transition_m))
+                out = max(out, 0.5 * climb)
+        return out
 
     def loop_room(self, ramp: str, start) -> float | None:
         """How far out (m) a split stub's free end must be when it splits on a fitted ramp
