@@ -210,6 +210,10 @@ def class_tables(stage):
 #     (rails.road_rail) and keeps the child-room fence (beside.child_room_fences, out to a
 #     child's far end at a fitted stub's free end: r12 from r13); Columbus, 8 drawn sets:
 #     first try 94 -> 105/112, infeasible 8 -> 0 (with SAMPLING 7); catalog unchanged
+# 37 (session 36's merges, one number):
+#   - a stub's free end keeps half the climb of a child running to another stub's free end
+#     without a crest (free_end.FreeEnds.connector_room: Columbus's r2 at 1 %; of the
+#     catalog only stack4's right turns)
 GEOMETRY_VERSION = 37
 
 
