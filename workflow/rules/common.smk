@@ -210,7 +210,7 @@ def class_tables(stage):
 #     (rails.road_rail) and keeps the child-room fence (beside.child_room_fences, out to a
 #     child's far end at a fitted stub's free end: r12 from r13); Columbus, 8 drawn sets:
 #     first try 94 -> 105/112, infeasible 8 -> 0 (with SAMPLING 7); catalog unchanged
-GEOMETRY_VERSION = 36
+GEOMETRY_VERSION = 37
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
