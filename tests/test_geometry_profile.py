@@ -32,8 +32,31 @@ def test_profile_starts_and_ends_at_the_given_grades_smoothly(z0, zc, z1, g0, g1
         zl, gl = evaluate_polys(polys, np.array([p.s_m - 1e-9]))
         zr, gr = evaluate_polys(polys, np.array([p.s_m]))
         assert abs(zl[0] - zr[0]) < 1e-6 and abs(gl[0] - gr[0]) < 1e-6
-    # the grade changes no faster than a vertical curve of the target grade over 40 m
-    assert np.abs(np.diff(g) / np.diff(s)).max() <= grade / 40.0 + 1e-9
+    # the grade changes no faster than a vertical curve of the target grade over 40 m, or
+    # than a climb from level of its shortest rise to the crest (whose curves shrink to
+    # rise / grade: 0.5 m in the short climb, 0.45 m in the last case)
+    rise = min(r for r in (z.max() - z0, z.max() - z1) if r > 1e-9)
+    assert np.abs(np.diff(g) / np.diff(s)).max() <= max(grade / 40.0, grade**2 / rise) + 1e-9
+
+
+@pytest.mark.parametrize("g0", [1e-6, 1e-4, 5e-4])
+def test_a_short_climb_from_a_slight_grade_reaches_the_target_as_from_level(g0):
+    # cloverstack 38's oA2: 1 m from its stub's free end at 0.05 %, 3 % target
+    _, s, z, g = _profile(300.0, 5.5, 6.5, 6.5, 0.03, g0)
+    _, _, z_level, g_level = _profile(300.0, 5.5, 6.5, 6.5, 0.03)
+    assert g.max() == pytest.approx(0.03, abs=1e-4)
+    # and differs from it by as little as the start grade: the climb starts g0 * 33 m early
+    assert np.abs(z - z_level).max() <= 40.0 * g0 and np.abs(g - g_level).max() <= 2.0 * g0
+
+
+def test_levelling_off_from_the_parents_grade_keeps_the_gentle_curve():
+    # leaves a parent climbing 3 % at the crest where that grade runs out (+0.45 m):
+    # one curve of 30 m from 3 % to level at 0.04 / 40 per metre, never steeper than 3 %
+    polys, s, z, g = _profile(600.0, 6.5, 6.5, 6.5, 0.04, 0.03)
+    assert g.max() == pytest.approx(0.03, abs=1e-12)
+    leg = s <= 100.0  # (the descent to 6.5 m at the level end is a short climb from level)
+    assert np.abs(np.diff(g[leg]) / np.diff(s[leg])).max() <= 0.04 / 40.0 + 1e-9
+    assert polys[1].s_m == pytest.approx(30.0) and polys[1].a == pytest.approx(6.95)
 
 
 def test_level_ends_give_the_profile_the_search_assumes():

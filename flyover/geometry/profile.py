@@ -11,12 +11,14 @@ steeper and the ramp misses its target.
 
 A ramp leaving (joining) another ramp where that one is on a grade starts (ends)
 at that grade, ``g0`` (``g1``), so that the road has no kink in its profile: its
-climb (descent) then begins with a vertical curve from that grade to its own at
-the same rate (``g / T`` per metre), and peaks lower where the climb is short
+climb (descent) then begins with a vertical curve from that grade to its own
 (:func:`_leg`); where its parent climbs on beyond the ramp's crest, the ramp's
-crest rises to where that grade runs out (a crest curve). With ``g0 = g1 = 0``
-the profile is the one above, and the one the search assumes
-(:func:`heights`).
+crest rises to where that grade runs out (a crest curve). A climb that only levels
+off from its parent's grade keeps the rate ``g / T``; the part of a rise the ramp
+climbs by itself has its curves shortened as a short climb from level has them
+(:func:`_leg_transition`), so that a slight start grade changes the profile only
+slightly. With ``g0 = g1 = 0`` the profile is the one above, and the one the
+search assumes (:func:`heights`).
 
 Example
 -------
@@ -93,14 +95,47 @@ def heights(s: np.ndarray, length: np.ndarray, z0, zc, z1, grade: float,
     return z0 + rise + fall
 
 
+def _leg_transition(h: float, e: float, grade: float, transition: float) -> float:
+    """The curve length ``t`` (for a change of ``grade``: its curves turn at
+    ``grade / t`` per metre) of a climb of ``h`` that starts at grade ``e`` and ends level.
+
+    Of the rise, levelling off from ``e`` at the rate ``grade / transition`` gains
+    ``l = e² · transition / (2 · grade)`` (0 where ``e <= 0``; :func:`_crest` makes
+    ``h >= l``); the rest, ``h - l``, the ramp climbs by itself. The rate is the mean of
+    the shares' rates, weighted by height: ``grade / transition`` for the levelling
+    off and, for the ramp's own climb, the rate of a climb of ``h`` from level, whose
+    curves shrink to ``h / grade`` where ``h < grade · transition``
+    (:func:`_climb_polys`). It is no sharper than the rate at which the climb just
+    reaches ``grade``, nor gentler than ``grade / transition``. So ``e -> 0`` gives the
+    climb from level (peak ``grade``), a rise that only levels off (``h = l``) keeps
+    ``transition`` (peak ``e``), and a climb long enough for ``grade`` is unchanged.
+
+    >>> _leg_transition(1.0, 0.0, 0.03, 40.0), round(_leg_transition(1.0, 0.0005, 0.03, 40.0), 3)
+    (33.333333333333336, 33.338)
+    >>> _leg_transition(0.45, 0.03, 0.04, 40.0), _leg_transition(3.0, 0.0005, 0.03, 40.0)
+    (40.0, 40.0)
+    >>> round(_leg_transition(0.5, 0.02, 0.04, 40.0), 3)  # 0.2 m levelling off, 0.3 m own
+    17.241
+    """
+    if h <= 0:
+        return transition
+    lev = min(e * e * transition / (2 * grade), h) if e > 0 else 0.0
+    if h - lev <= 1e-9:  # levelling off only (to rounding)
+        return transition
+    own = h / (lev / transition + (h - lev) / min(transition, h / grade))
+    peak = 2 * grade * h / (2 * grade**2 - e * e) if e < grade and e * e < 2 * grade**2 \
+        else transition
+    return min(transition, max(own, peak))
+
+
 def _leg(h: float, e: float, grade: float, transition: float) -> tuple[float, float, float, float]:
     """A climb of ``h >= 0`` that starts at grade ``e`` (toward the top, may be negative)
     and ends level: ``(a1, q, m, a2)``: a vertical curve of ``a1`` m from ``e`` to the
     peak grade ``q``, ``m`` m at ``q``, a curve of ``a2`` m from ``q`` to level, both curves
-    at ``grade / transition`` per metre. ``q`` is ``grade`` unless the climb is too
-    short for it; ``h`` is at least what levelling off from ``e`` gains
+    at ``grade / t`` per metre (``t``: :func:`_leg_transition`). ``q`` is ``grade`` unless
+    the climb is too short for it; ``h`` is at least what levelling off from ``e`` gains
     (:func:`_crest`)."""
-    t = transition
+    t = _leg_transition(h, e, grade, transition)
     q = grade
     m = (h - t * (2 * grade**2 - e**2) / (2 * grade)) / grade if e <= grade else \
         (h - t * e**2 / (2 * grade)) / grade

@@ -214,6 +214,8 @@ def class_tables(stage):
 #   - a stub's free end keeps half the climb of a child running to another stub's free end
 #     without a crest (free_end.FreeEnds.connector_room: Columbus's r2 at 1 %; of the
 #     catalog only stack4's right turns)
+#   - a climb from a slight grade shortens its vertical curves by the share of the rise it
+#     climbs itself (profile._leg_transition: cloverstack 20 oA1, 38 oA2 reach 3 %)
 GEOMETRY_VERSION = 37
 
 
