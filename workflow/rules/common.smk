@@ -210,7 +210,15 @@ def class_tables(stage):
 #     (rails.road_rail) and keeps the child-room fence (beside.child_room_fences, out to a
 #     child's far end at a fitted stub's free end: r12 from r13); Columbus, 8 drawn sets:
 #     first try 94 -> 105/112, infeasible 8 -> 0 (with SAMPLING 7); catalog unchanged
-GEOMETRY_VERSION = 36
+# 37: a T whose ramps all run to one pair's line (DC's E Street Expressway, to I-66 /
+#     Potomac Freeway) meets it square at a junction of its own beyond the line's terminal
+#     (roads.tee_junctions), and the ramps between them keep their room from that junction
+#     (rails.crossing_s), where it took the first free diagonal at the centre; left turns
+#     into it fly a level above those leaving it (levels); a ramp joining on the left is no
+#     loop (chains: DC's r8, r13); a continuation's ramp neither orders nor is ordered by
+#     pos (rails: DC's r4); only DC's file 26 changes (layout_roads identical on the catalog
+#     and the other extracts)
+GEOMETRY_VERSION = 37
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
