@@ -288,19 +288,18 @@ DC = OSM_DIR / "26_us_dc_i66_us50_e_st_expwy.osm"
 def test_a_right_turn_between_two_roads_on_one_level_is_a_level_ramp():
     """DC (file 26): I-66 and the E Street Expressway both end here, on one level (6.5 m,
     above I-66 / US 50). r14 (E Street to I-66 North) leaves and joins on the right and
-    turns right by 45°, with no crest planned: it was fitted level and every slope drawn
-    for it was recorded infeasible (`level ramp (both ends at z=6.5 m) cannot have a 3 %
-    slope`, sets 0-2 of 4 drawn). Now sampling fixes its slope at 0. r5 (I-66 North to
-    E Street, 135° round E Street's leg) crosses r14 and is lifted over it when it is
-    drawn a slope (fixed level, it met r14 at its level on sets 0 and 1); r10 (a left exit
-    across the Potomac Freeway's lanes, lifted over them) and the flyovers r12, r13 keep
-    their slopes too."""
+    turns right, with no crest planned: it was fitted level and every slope drawn for it
+    was recorded infeasible (`level ramp (both ends at z=6.5 m) cannot have a 3 % slope`,
+    sets 0-2 of 4 drawn). Now sampling fixes its slope at 0. Since E Street meets the
+    I-66 line at a junction of its own (GEOMETRY_VERSION 37), r5 (I-66 North to E Street)
+    is such a right turn by 90° too (before: 135° round E Street's diagonal leg, lifted
+    over r14); the left turns r10, r12, r13 keep their slopes."""
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
     topo = next(t for t in read_osm_topologies(DC) if t.ramps)
     level = level_ramps(topo)
-    assert "r14" in level
-    assert not {"r5", "r10", "r12", "r13", "r1", "r2", "r6"} & level
+    assert {"r14", "r5"} <= level
+    assert not {"r10", "r12", "r13", "r1", "r2", "r6"} & level
     b = LayoutState(topo, {}, {r: RampFeatures(60.0, 0.0 if r in level else 4.0)
                                for r in topo.ramps}, LayoutSettings(), 0)
     spec = b.spec("r14", b.features["r14"])
@@ -418,3 +417,99 @@ def test_columbus_stubs_keep_room_for_the_connector_climbing_between_their_free_
     assert b.spec("r2", feats["r2"]).least_m >= 0.75 * climb
     # a connector between two stubs at one height keeps no such room
     assert fe.connector_room("r14", 0.5) == pytest.approx(0.0)
+
+
+def _dc():
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    return next(t for t in read_osm_topologies(DC) if t.ramps)
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_t_whose_ramps_all_run_to_one_line_meets_it_at_a_junction_of_its_own():
+    """DC (file 26): the E Street Expressway ends here and its ramps (r5, r7, r10-r14) all
+    run to or from the I-66 / Potomac Freeway line. On the map it meets that line square,
+    ~330 m north of US 50, a T junction of its own. It was placed on the first free
+    diagonal at the centre, where all four tied: r5, r7, r9, r11-r13 turned by 135°. Now
+    it meets the line square beyond I-66's terminal, on the side its ramps' ends imply
+    (right exits turning right), its stations counted from that junction."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    topo = _dc()
+    roads = layout_roads(topo, {}, LayoutSettings(), {r: 4.0 for r in topo.ramps})
+    moves = Movements(topo, roads)
+    turns = {r: round(float(np.degrees(moves.movement(r)))) for r in
+             ("r5", "r7", "r10", "r12", "r13", "r14")}
+    assert turns == {"r5": -90, "r7": -90, "r10": 90, "r12": 90, "r13": 90, "r14": -90}
+    n, e = roads["I66N"], roads["way50428544E"]
+    j = np.array(getattr(e, "junction", None) or (np.nan, np.nan))
+    d = np.array([np.cos(n.heading), np.sin(n.heading)])
+    along = float(j @ d)  # on I-66 North's line, beyond its start (the line's terminal)
+    assert along > n.t_lo + LayoutSettings().gap_m
+    assert abs(float(j @ np.array([-d[1], d[0]]))) < 1.0
+    assert abs(np.cos(e.heading - n.heading)) < 1e-9
+    # E Street's carriageways pass through the junction, its terminal out from it
+    for r in ("way50428544E", "way50428544W"):
+        x = roads[r]
+        foot = np.array(x.origin) + float((j - np.array(x.origin))
+                                          @ np.array([np.cos(x.heading), np.sin(x.heading)])) \
+            * np.array([np.cos(x.heading), np.sin(x.heading)])
+        assert np.hypot(*(foot - j)) < 5.0
+    # r8 and r13 join on the left: direct left turns, not loops
+    assert not moves.is_loop("r8") and not moves.is_loop("r13")
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_ramps_to_a_t_at_a_junction_of_its_own_keep_their_room_from_that_junction():
+    """DC (file 26): on I-66 North r5 leaves for E Street before E Street's junction and
+    r14 joins after it; r10 leaves I-66 South before it. Counted from the centre, their
+    windows lay round US 50's crossing, far from E Street. And the left turns between the
+    line and E Street cross each other: those into E Street (r10) fly a level above those
+    leaving it (r12, r13), as at a directional T."""
+    topo = _dc()
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 0.0 if r in level_ramps(topo) else 4.0)
+             for r in topo.ramps}
+    b = LayoutState(topo, {}, feats, st, 0)
+    n, s = b.roads["I66N"], b.roads["I66S"]
+    j = np.array(getattr(b.roads["way50428544E"], "junction", None) or (np.nan, np.nan))
+    jn = float((j - np.array(n.origin)) @ np.array([np.cos(n.heading), np.sin(n.heading)]))
+    js = float((j - np.array(s.origin)) @ np.array([np.cos(s.heading), np.sin(s.heading)]))
+    w = st.ramp_lane_width_m
+    r5 = b.windows.rail("r5", feats["r5"], ("I66N", Label.OUT_R), True, False, w)
+    r14 = b.windows.rail("r14", feats["r14"], ("I66N", Label.IN_R), False, False, w)
+    r10 = b.windows.rail("r10", feats["r10"], ("I66S", Label.OUT_L), True, False, w)
+    assert n.t_lo < r5.lo <= r5.hi < jn
+    assert jn < r14.lo <= r14.hi
+    assert r10.hi < js
+    assert b.plan["r10"] > b.plan["r12"] == b.plan["r13"] > 6.5
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_continuations_ramp_is_not_ordered_by_pos():
+    """DC (file 26): r4 (I-66 South to the Potomac Freeway, straight on) is held by I-66
+    South's end; r10 (to E Street, ``pos`` 0.46 against r4's 0.24) leaves I-66 South
+    beyond E Street's junction. Fitted first, r10 held r4 to before it by ``pos``: r4 left
+    1.4 km out and ran back along I-66 South, 1,158 m for its real 61 m (drawn set 0)."""
+    topo = _dc()
+    st = LayoutSettings()
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    b = LayoutState(topo, {}, feats, st, 0)
+    s = b.roads["I66S"]
+    t10 = s.t_hi - 900.0
+    b.fitted.attached.setdefault("I66S", []).append((0.4628, t10, t10, "r10", t10))
+    r4 = b.windows.rail("r4", feats["r4"], ("I66S", Label.OUT_L), True, False,
+                        st.ramp_lane_width_m)
+    assert s.t_hi - 1.5 * st.gap_m - 1e-9 <= r4.lo <= r4.hi <= s.t_hi - st.gap_m + 1e-9
+
+
+def test_no_catalog_design_has_a_t_at_a_junction_of_its_own():
+    """Only a T whose ramps all run to a line of two expressways continuing one another
+    (DC's) gets a junction of its own: the catalog's roads all meet at the centre."""
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    for name, t in catalog_topologies().items():
+        roads = layout_roads(t, {}, LayoutSettings(), {r: 3.0 for r in t.ramps})
+        assert all(getattr(r, "junction", None) is None for r in roads.values()), name

@@ -149,11 +149,14 @@ class Movements:
         return float(wrap(self.roads[b].heading - self.roads[a].heading))
 
     def is_loop(self, ramp: str) -> bool:
-        """A left movement between the roads, leaving its parent on the right."""
+        """A left movement between the roads, leaving its parent on the right and not
+        joining its road on the left (DC's ``r13``, E Street Expressway to I-66 South, leaves
+        the stub ``r11`` on the right and joins I-66 on its left: a direct left turn, which
+        a loop, turning right by 270°, cannot be)."""
         start, end = ends(self.topo, ramp)
         if start is None or end is None:
             return False
-        if start[1] is not Label.OUT_R:
+        if start[1] is not Label.OUT_R or end[1] is Label.IN_L:
             return False
         raw = self.movement(ramp)
         if raw is None or not (abs(raw - np.pi / 2) < 0.2):

@@ -12,7 +12,9 @@ the settings.
   flyover levels of a four-level stack, the three levels of a directional T. A left
   turn between two expressways that both end here (a 5-leg's, on one level) crosses
   the ramps on that level and the flyovers leaving or joining it: its crest is the
-  lowest level ``clearance_m`` above that level and every other planned crest.
+  lowest level ``clearance_m`` above that level and every other planned crest; where
+  such left turns run both ways between a line and a T meeting it at a junction of its
+  own (DC's E Street Expressway) they cross, and those into the T go one level higher.
 * A stub feeding or fed by such a ramp ends ``clearance_m`` from its road
   toward that crest; if its other children (right turns) go on to a road (a
   turbine), no higher than ``clearance_m`` (and 0.5 m) under the lowest
@@ -87,8 +89,16 @@ class LevelPlan:
             za = max(roads[road_of(topo, ramp, f)].z for f in (False, True))
             over = [z for z in st.levels_m
                     if z >= max(za, top_plan) + st.fit.clearance_m - 1e-6]
+            # a T meeting a line at a junction of its own (its roads' ``junction``): where
+            # left turns run both ways between them they cross, and those into the T go one
+            # level higher (DC's r10 over r12, r13): they climb on the line beyond the
+            # junction and descend on the T's leg, which keeps room for two levels, where
+            # those leaving it descend between the junction and the line's terminal
+            b = roads[road_of(topo, ramp, True)]
+            up = int(b.junction is not None and any(
+                roads[road_of(topo, o, False)].junction is not None for o in between))
             if over:
-                plan[ramp] = float(over[0])
+                plan[ramp] = float(over[min(up, len(over) - 1)])
         return plan
 
     def low_connector(self, ramp: str) -> bool:

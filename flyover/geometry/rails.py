@@ -40,7 +40,12 @@ attachments) and the ramp's targets.
   (:func:`flyover.geometry.chains.continuations`) attaches within ``gap_m / 2`` beyond
   ``gap_m`` from where its road ends (begins), as short as real ones are; the other
   ramps on that road keep ``gap_m`` beyond that window, fitted first or not
-  (:func:`beyond_continuation`).
+  (:func:`beyond_continuation`). Held by the road's end, it neither orders the others
+  by its ``pos`` nor is ordered by theirs (DC's r4, ``pos`` 0.24 on I-66 South, was held
+  before r10, 0.46, which leaves it beyond E Street's junction: 1,158 m long for 61 m).
+* A ramp between a road and a T that meets the road's line at a junction of its own
+  (:func:`flyover.geometry.roads.tee_junctions`) keeps its room from that junction, not
+  from the centre (:meth:`AttachmentWindows.crossing_s`).
 * Whatever the fall-backs above give, a window on a road keeps ``gap_m`` from where the
   ramps fitted so far attach to it, on either side (:func:`clear_of_others`): the writer's
   junctions take up to a third of the distance between two attachments.
@@ -115,6 +120,7 @@ class AttachmentWindows:
         tz = other + st.crossing_margin_m + extra
         if moves.same_road(ramp):  # collector-distributor: leave room for what attaches to it
             tz += st.cd_clear_m
+        at = self.crossing_s(road, ramp, is_start)
         if label is Label.OUT_M or (pos is not None and pos >= 0.99 and np.isfinite(r.t_hi)):
             lo = hi = r.t_hi
         elif label is Label.IN_M or (pos is not None and pos <= 0.01 and np.isfinite(r.t_lo)):
@@ -126,11 +132,11 @@ class AttachmentWindows:
                 reach = tz + st.stub_window_m
             elif bound is not None:  # no farther out than the ramp needs
                 reach = max(tz + st.gap_m, min(reach, tz + bound))
-            if before and r.t_lo > -tz:  # the road begins here: everything is after
+            if before and r.t_lo > at - tz:  # the road begins here: everything is after
                 before = False
-            elif not before and r.t_hi < tz:  # it ends here: everything is before
+            elif not before and r.t_hi < at + tz:  # it ends here: everything is before
                 before = True
-            lo, hi = (-reach, -tz) if before else (tz, reach)
+            lo, hi = (at - reach, at - tz) if before else (at + tz, at + reach)
             lo, hi = max(lo, r.t_lo + st.gap_m), min(hi, r.t_hi - st.gap_m)
             if lo > hi - 1.0:  # a half line begins (ends) beyond the room: as far again
                 lo, hi = (hi - (reach - tz), hi) if before else (lo, lo + reach - tz)
@@ -139,8 +145,10 @@ class AttachmentWindows:
                     (r.t_lo + st.gap_m, r.t_lo + 1.5 * st.gap_m)
             else:  # clear of where a ramp straight on attaches by this road's end
                 lo, hi = beyond_continuation(moves, st, road, ramp, lo, hi)
-            if pos is not None:
+            if pos is not None and ramp not in moves.continuing:
                 for p, t_min, t_max, other, t_other in self.fitted.attached.get(road, []):
+                    if other in moves.continuing:
+                        continue  # held by the road's end, beyond the others: no order
                     round_loop = moves.goes_round_loop(ramp, other, road)
                     room = self.loops.room_round(ramp, other)
                     if p < pos:
@@ -175,6 +183,22 @@ class AttachmentWindows:
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail.line(road, label.value, r.origin, r.heading, r.z, off, lo, hi)
+
+    def crossing_s(self, road: str, ramp: str, is_start: bool) -> float:
+        """The station on ``road`` of the crossing ``ramp``'s end there keeps its room
+        from: the centre (0), or the junction of a T meeting the line at one of its own
+        (:func:`flyover.geometry.roads.tee_junctions`) for a ramp on that T's roads or
+        whose chain runs only to (from) them."""
+        r = self.roads[road]
+        j = r.junction
+        if j is None:
+            far = {self.roads[x].junction for x in _far_roads(self.topo, ramp, is_start)
+                   if x in self.roads}
+            j = far.pop() if len(far) == 1 else None
+        if j is None:
+            return 0.0
+        return float((j[0] - r.origin[0]) * np.cos(r.heading)
+                     + (j[1] - r.origin[1]) * np.sin(r.heading))
 
     def ramp_rail(self, parent: str, ramp: str, label: Label, is_start: bool,
                   width: float, level: bool = True, gentle: float | None = None,
@@ -261,6 +285,29 @@ def beyond_continuation(moves: Movements, st: LayoutSettings, road: str, ramp: s
                 and np.isfinite(r.t_hi):
             hi = min(hi, r.t_hi - 2.5 * gap)
     return lo, hi
+
+
+def _far_roads(topo, ramp: str, forward: bool) -> set[str]:
+    """Every road the chains from ``ramp`` lead to (``forward``) or come from: through its
+    other end, or a stub's children there."""
+    g, out, todo, seen = topo.graph, set(), [ramp], set()
+    while todo:
+        node = todo.pop()
+        if node in seen:
+            continue
+        seen.add(node)
+        if g.nodes[node]["kind"] == "road":
+            out.add(node)
+            continue
+        start, end = ends(topo, node)
+        nxt = end if forward else start
+        if nxt is not None:
+            todo.append(nxt[0])
+        elif forward:
+            todo += [v for _, v in g.out_edges(node)]
+        else:
+            todo += [u for u, _ in g.in_edges(node)]
+    return out
 
 
 def clear_of_others(fitted: FittedRamps, st: LayoutSettings, road: str, ramp: str,

@@ -15,8 +15,8 @@ settings.
   farther by the room a ramp at that terminal needs to climb one level there: at the
   lowest slope of the ramps between that expressway and a road on another level or
   flying over between two on its level (``slopes``, ``climbing``;
-  :func:`terminal_room`), not of every ramp of the interchange (DC's I-66: r1, r2 and
-  r13, not the E Street Expressway's flyover r12). Each through expressway is on its
+  :func:`terminal_room`), not of every ramp of the interchange (DC's I-66: r1 and r2,
+  not the E Street Expressway's flyovers). Each through expressway is on its
   own level (0, 1, ...); the terminating ones, which never meet, share the level above
   them (a T's terminating expressway above the through one).
 * Two expressways ending here that continue one another
@@ -26,6 +26,18 @@ settings.
   kept one's median just left of its lanes (the median wide enough for it), to
   ``CONTINUATION_GAP_M`` short of that terminal, so the ramps between them are short
   and move over by about a lane, as a merge from the left does.
+* A T whose ramps all run to or from one such pair's line (:func:`tee_junctions`: DC's
+  E Street Expressway, to the I-66 / Potomac Freeway line) meets that line square at a
+  junction of its own on the kept one's leg, as on the map, not at the centre: beyond the
+  kept one's terminal by ``terminal_m``, the other roads' half width and the room its
+  flyovers leaving it need to descend to the line; its own terminal is out from that
+  junction by the room those into it need to descend two levels (they fly over those
+  leaving it: :class:`flyover.geometry.levels.LevelPlan`) or those leaving it to climb
+  one; it lies on the side where most ramp ends lie on the side their ramp turns to. Its
+  roads record the junction (:attr:`RoadLine.junction`), the origin of their stations;
+  the ramps between it and the line keep their room from it
+  (:meth:`flyover.geometry.rails.AttachmentWindows.crossing_s`); its ramps do not size the
+  kept one's terminal.
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
   from the axis; where ramps leave or join a carriageway on its left (they run
   in the median) the median is wider by two ramp lanes and shoulders.
@@ -33,18 +45,19 @@ settings.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
 
-from flyover.geometry.chains import continuations, ends, road_of, terminal, wrap
+from flyover.geometry.chains import Continuation, continuations, ends, road_of, terminal, wrap
 from flyover.geometry.settings import LayoutSettings
 from flyover.topology.model import Label, Topology
 
-__all__ = ["RoadLine", "layout_roads", "road_bands", "terminal_room", "CONTINUATION_GAP_M",
-           "CONTINUATION_SIDE_M"]
+__all__ = ["RoadLine", "layout_roads", "road_bands", "tee_junctions", "terminal_room",
+           "CONTINUATION_GAP_M", "CONTINUATION_SIDE_M"]
 
 #: how far short of its partner's terminal an expressway that continues it ends (m;
 #: :func:`flyover.geometry.chains.continuations`): room for the ramps there to move aside
@@ -67,24 +80,27 @@ class RoadLine:
     t_lo: float  # extent of the carriageway along its line (-inf .. inf for through roads)
     t_hi: float
     half_width: float  # of its expressway, median to outer edge
+    #: where a T meeting a line at its own junction (:func:`tee_junctions`) meets it (x, y):
+    #: the origin of its stations; ``None`` for the roads meeting at the centre
+    junction: tuple[float, float] | None = None
 
 
 def terminal_room(topo: Topology, level: Mapping[str, int], slopes: Mapping[str, float],
-                  st: LayoutSettings, climbing: frozenset[str] = frozenset()
-                  ) -> dict[str, float]:
+                  st: LayoutSettings, climbing: frozenset[str] = frozenset(),
+                  skip: frozenset[str] = frozenset()) -> dict[str, float]:
     """The room beyond ``terminal_m`` at each expressway's terminal (expressway → m): a
     climb of one level at the lowest slope target (``slopes``: ramp → %) of the ramps
     whose chain joins a carriageway of that expressway to a road on another level
     (``level``: expressway → level) or that climb over others between two roads on one
     level (``climbing``: the planned crests of :class:`flyover.geometry.levels.LevelPlan`),
-    and a grade transition; 0 where none does."""
+    and a grade transition; 0 where none does. The ramps of ``skip`` size nothing."""
     exp = {r: e for e, rs in topo.expressways.items() for r in rs}
     low: dict[str, float] = {}
     for ramp in topo.ramps:
         g = slopes.get(ramp, 0.0)
         ea, eb = (exp.get(road_of(topo, ramp, f)) for f in (False, True))
-        if g <= 0 or ea is None or eb is None or (level[ea] == level[eb]
-                                                  and ramp not in climbing):
+        if g <= 0 or ea is None or eb is None or ramp in skip or (level[ea] == level[eb]
+                                                                  and ramp not in climbing):
             continue
         for e in (ea, eb):
             low[e] = min(low.get(e, g), g)
@@ -100,6 +116,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     exps = topo.expressways
     term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
     conts = continuations(topo)
+    tees = tee_junctions(topo)  # T → the pair whose line it meets at a junction of its own
     kept_of = {c.kept: c for c in conts}  # a pair is placed by its kept expressway
     through_of = {c.through: c for c in conts}
     pair = {e: {c.kept, c.through} for c in conts for e in (c.kept, c.through)}
@@ -126,6 +143,17 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     n_through = sum(not term_of[e] for e in exps)
     level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
     room = terminal_room(topo, level, slopes or {}, st, climbing)
+    if tees:  # a T at a junction of its own: its ramps climb there, not at the line's terminal
+        exp = {r: e for e, rs in exps.items() for r in rs}
+        own = frozenset(x for x in topo.ramps if tees.keys() & {
+            exp.get(road_of(topo, x, f)) for f in (False, True)})
+        room = terminal_room(topo, level, slopes or {}, st, climbing, own)
+        down, up = _tee_rooms(topo, tees, slopes or {}, st, climbing)
+
+    def inner_of(e: str) -> float:
+        """How far from the centre (a T's own junction) along its leg ``e`` begins."""
+        other = max([half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
+        return other + st.terminal_m + room.get(e, 0.0)
 
     def place(options: dict[str, float]) -> dict[str, RoadLine]:
         roads = {}
@@ -138,9 +166,16 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             if e in through_of and through_of[e].meets:  # on past the centre to its partner
                 inner = -(other + st.terminal_m + room.get(through_of[e].kept, 0.0)
                           - CONTINUATION_GAP_M)
+            at, junction = np.zeros(2), None
+            if e in tees:  # its own junction on the kept one's leg, beyond that one's terminal
+                kept = tees[e].kept
+                a = leg(kept, options[kept])
+                at = (inner_of(kept) + inner + down[e]) * np.array([np.cos(a), np.sin(a)])
+                junction = (float(at[0]), float(at[1]))
+                inner += up[e]
             for i, r in enumerate(rs):
                 h = h1 if i == 0 else h1 + np.pi
-                o = ref[r] * np.array([np.sin(h), -np.cos(h)])
+                o = at + ref[r] * np.array([np.sin(h), -np.cos(h)])
                 term = terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
                 if term == "end":
@@ -150,7 +185,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
                 n = lanes.get(r, st.default_lanes)
                 roads[r] = RoadLine(r, e, int(n), k, k * st.level_height_m,
                                     (float(o[0]), float(o[1])), float(wrap(h)), t_lo, t_hi,
-                                    half[e])
+                                    half[e], junction)
         return roads
 
     def leg(e: str, h: float) -> float:
@@ -165,7 +200,7 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             return [h, h + np.pi]
         return [leg(e, h)] + ([leg(e, h) + np.pi] if e in kept_of else [])
 
-    units = [e for e in order if e not in through_of]
+    units = [e for e in order if e not in through_of and e not in tees]
 
     def spread(opts: dict[str, float]) -> dict[str, float]:
         """Headings of the third and further expressways, at 45° steps: each where its
@@ -184,13 +219,22 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
             opts[b] = leg(c.kept, opts[c.kept]) + np.pi - leg(b, 0.0)
         return opts
 
+    def square(opts: dict[str, float], side: float) -> dict[str, float]:
+        """A T meeting a pair's line at its own junction: square to the kept one's leg,
+        on its left (``side`` +1) or right (-1)."""
+        for e, c in tees.items():
+            a = leg(c.kept, opts[c.kept]) + side * np.pi / 2
+            opts[e] = a if terminal(topo, exps[e][0]) == "start" else a + np.pi
+        return opts
+
     base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
     best, best_score = None, -1e9
-    for flip in ([False, True] if len(units) > 1 else [False]):
+    for flip, side in itertools.product([False, True] if len(units) > 1 else [False],
+                                        [1.0, -1.0] if tees else [0.0]):
         opts = dict(base)
         if flip:
             opts[units[1]] += np.pi
-        roads = place(spread(opts))
+        roads = place(square(spread(opts), side))
         score = 0
         for ramp in topo.ramps:
             a = road_of(topo, ramp, False)
@@ -208,6 +252,53 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
         if score > best_score:
             best, best_score = roads, score
     return best
+
+
+def _tee_rooms(topo: Topology, tees: Mapping[str, Continuation], slopes: Mapping[str, float],
+               st: LayoutSettings, climbing: frozenset[str]
+               ) -> tuple[dict[str, float], dict[str, float]]:
+    """The room (m) a T meeting a line at a junction of its own keeps for its flyovers
+    (``climbing``): between the line's terminal and the junction (``down``: one level at the
+    lowest slope of those leaving it, which descend to the line there), and between the
+    junction and its own terminal (``up``: one level at that slope, or two at the lowest
+    slope of those into it, which fly a level higher where left turns run both ways:
+    :class:`flyover.geometry.levels.LevelPlan`), each with a grade transition; 0 for none."""
+    exp = {r: e for e, rs in topo.expressways.items() for r in rs}
+    down, up = {}, {}
+    for e in tees:
+        leave = [slopes.get(x, 0.0) for x in climbing if exp.get(road_of(topo, x, False)) == e]
+        into = [slopes.get(x, 0.0) for x in climbing if exp.get(road_of(topo, x, True)) == e]
+        leave, into = [g for g in leave if g > 0], [g for g in into if g > 0]
+        h, tr = st.level_height_m, st.fit.transition_m
+        down[e] = h / (min(leave) / 100) + tr if leave else 0.0
+        n = 2 if leave else 1
+        up[e] = max([down[e]] + ([n * h / (min(into) / 100) + tr] if into else []))
+    return down, up
+
+
+def tee_junctions(topo: Topology) -> dict[str, Continuation]:
+    """The expressways ending here (a T's, not one of a pair that continue one another)
+    whose every ramp runs to or from the line of one such pair, each with that pair
+    (:func:`flyover.geometry.chains.continuations`): such a T meets the line at a junction
+    of its own, as DC's E Street Expressway meets the I-66 / Potomac Freeway line about
+    330 m north of US 50, not the centre where the line crosses the other roads."""
+    conts = continuations(topo)
+    paired = {e: c for c in conts for e in (c.kept, c.through)}
+    exp = {r: e for e, rs in topo.expressways.items() for r in rs}
+    out = {}
+    for e, rs in topo.expressways.items():
+        if e in paired or not any(terminal(topo, r) for r in rs):
+            continue
+        lines = set()
+        for ramp in topo.ramps:
+            a, b = (exp.get(road_of(topo, ramp, f)) for f in (False, True))
+            if a is None or b is None or (a == e) == (b == e):
+                continue
+            c = paired.get(b if a == e else a)
+            lines.add(None if c is None else c.kept)
+        if len(lines) == 1 and None not in lines:
+            out[e] = next(c for c in conts if c.kept in lines)
+    return out
 
 
 def road_bands(roads: Mapping[str, RoadLine], st: LayoutSettings) -> np.ndarray:

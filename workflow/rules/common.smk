@@ -216,6 +216,14 @@ def class_tables(stage):
 #     catalog only stack4's right turns)
 #   - a climb from a slight grade shortens its vertical curves by the share of the rise it
 #     climbs itself (profile._leg_transition: cloverstack 20 oA1, 38 oA2 reach 3 %)
+#   - a T whose ramps all run to one pair's line (DC's E Street Expressway, to I-66 /
+#     Potomac Freeway) meets it square at a junction of its own beyond the line's terminal
+#     (roads.tee_junctions), and the ramps between them keep their room from that junction
+#     (rails.crossing_s), where it took the first free diagonal at the centre; left turns
+#     into it fly a level above those leaving it (levels); a ramp joining on the left is no
+#     loop (chains: DC's r8, r13); a continuation's ramp neither orders nor is ordered by
+#     pos (rails: DC's r4); only DC's file 26 changes (layout_roads identical on the catalog
+#     and the other extracts)
 GEOMETRY_VERSION = 37
 
 

@@ -14,7 +14,10 @@
 #    level, every slope drawn for it infeasible); catalog unchanged
 # 7: a ramp running straight on between two ramps (feasibility.straight_connectors:
 #    Columbus's r12) has its radius fixed at inf; catalog unchanged (no such ramp)
-SAMPLING_VERSION = 7
+# 8: DC's E Street Expressway meets the I-66 line at a junction of its own (GEOMETRY 37):
+#    r5 turns right by 90 degrees on one level, a level ramp (slope fixed at 0); r8 and r13
+#    are no loops (they join on the left); the other classes unchanged
+SAMPLING_VERSION = 8
 
 
 rule sample_class:
