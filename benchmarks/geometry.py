@@ -76,13 +76,19 @@ def drawn_feature_sets(topology, profile, n, seed):
     As sampling forbids them (its ``extra=``, :func:`flyover.geometry.feasibility.
     forbidden_features`): no ``inf`` on a turning ramp, and an outer connector and its
     loop whose radii :meth:`~flyover.geometry.feasibility.RoundLoop.allows` does not are
-    drawn again, both, from a generator of their own (the other draws stay the same)."""
-    from flyover.geometry.feasibility import fixed_features, round_loops, turning_ramps
-    from flyover.sampling.model import Feature
+    drawn again, both, from a generator of their own (the other draws stay the same), and
+    so is a radius a ramp's fixed windows cannot hold with its road's lanes
+    (:meth:`~flyover.geometry.feasibility.ShiftRoom.allows`), from another."""
+    from flyover.geometry.feasibility import (
+        fixed_features, round_loops, shift_rooms, turning_ramps,
+    )
+    from flyover.sampling.model import Feature, profile_from_dict
 
     fixed = fixed_features(topology)
     turning = turning_ramps(topology)  # inf is forbidden on them (sampling's extra=)
     pairs = round_loops(topology)
+    rooms = shift_rooms(topology, profile_from_dict("drawn", profile))
+    room_rng = np.random.default_rng([seed, 2])
     finite = [v for v in profile["ramp"]["radius_m"] if math.isfinite(float(v))]
     rng = np.random.default_rng(seed)
     again = np.random.default_rng([seed, 1])
@@ -99,6 +105,11 @@ def drawn_feature_sets(topology, profile, n, seed):
                 for r in (p.connector, p.loop):
                     ramps[r] = replace(ramps[r], radius_m=float(again.choice(
                         finite if r in turning else profile["ramp"]["radius_m"])))
+        for room in rooms:
+            n = lanes.get(room.road) if room.road is not None else None
+            while not room.allows(ramps[room.ramp].radius_m, n):
+                ramps[room.ramp] = replace(ramps[room.ramp], radius_m=float(room_rng.choice(
+                    profile["ramp"]["radius_m"])))
         out[k] = (lanes, ramps)
     return out
 

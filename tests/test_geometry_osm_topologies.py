@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from flyover.geometry.build import _fit_with_levels
-from flyover.geometry.feasibility import fixed_features, level_ramps
+from flyover.geometry.feasibility import fixed_features, forbidden_features, level_ramps
 from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.settings import Z_MARGIN
 from flyover.geometry.state import LayoutState
@@ -513,3 +513,70 @@ def test_no_catalog_design_has_a_t_at_a_junction_of_its_own():
     for name, t in catalog_topologies().items():
         roads = layout_roads(t, {}, LayoutSettings(), {r: 3.0 for r in t.ramps})
         assert all(getattr(r, "junction", None) is None for r in roads.values()), name
+
+
+def _forbids(model, assigned: dict) -> bool:
+    """Whether the feature model forbids the partial row ``{(element, feature): value}``."""
+    index = {(p.element, p.feature): i for i, p in enumerate(model.parameters)}
+    row = {index[k]: model.parameters[index[k]].values.index(v) for k, v in assigned.items()}
+    return any(f.matches(row) for f in model.forbidden)
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_continuations_ramp_is_sampled_only_radii_its_shift_can_be_built_with():
+    """DC (file 26): r3 / r4 run straight on between I-66 and the Potomac Freeway, which
+    runs in I-66's median beside its lanes: each attaches by one road's end and within
+    ``gap_m / 2`` beyond ``gap_m`` from the other's start, so it shifts sideways by the
+    Potomac Freeway's lanes (3.75 m each) + 1 m - its own 4 m within a run of 80-100 m.
+    An S of two arcs R: run 2 R sin θ, shift 2 R (1 - cos θ), so R <= (L² + d²) / (4 d):
+    4 lanes, d = 12 m: 211 m; 5 lanes, d = 15.75 m: 163 m; 3 lanes, 8.25 m: 305 m. A 280 m
+    radius was drawn on 4 of 56 ramps of 4 drawn sets and resampled (met at 30-40 m).
+    Sampling now forbids what that room cannot hold (at 0.95 × the radius, as the fit's
+    least length does), and inf (it must shift)."""
+    from flyover.sampling.model import default_profile, feature_model  # noqa: PLC0415
+
+    topo = _dc()
+    prof = default_profile()
+    model = feature_model(topo, prof, forbidden_features(topo, prof, LayoutSettings()),
+                          fixed_features(topo))
+    for ramp, road in (("r3", "way50427247N"), ("r4", "way50427247S")):
+        def forbidden(radius, lanes, ramp=ramp, road=road):
+            return _forbids(model, {(ramp, Feature.RADIUS_M): radius,
+                                    (road, Feature.LANES): lanes})
+        assert forbidden(280.0, 4.0) and forbidden(280.0, 5.0) and forbidden(210.0, 5.0)
+        assert not forbidden(210.0, 4.0) and not forbidden(150.0, 5.0)
+        assert not forbidden(280.0, 3.0)
+        assert all(forbidden(float("inf"), n) for n in (3.0, 4.0, 5.0))
+        assert not any(forbidden(r, n) for r in (30.0, 40.0) for n in (3.0, 4.0, 5.0))
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_the_radius_bound_of_a_continuations_ramp_is_the_s_shift_its_windows_hold():
+    """The hand check of the rule above on r3's windows (way50427247N with 4 lanes): run
+    L 80-100 m, shift d 12 m; the largest S-shift radius is (100² + 12²) / (4 · 12) =
+    211.3 m: 210 m is held (0.95 × 210 = 199.5 m), 280 m is not (266 m)."""
+    from flyover.geometry.feasibility import fixed_window_ramps, shift_rooms  # noqa: PLC0415
+
+    topo = _dc()
+    assert fixed_window_ramps(topo) == {"r3", "r4"}
+    b = LayoutState(topo, {"way50427247N": 4}, {}, LayoutSettings(), 0)
+    spec = b.spec("r3", RampFeatures(210.0, 0.0))
+    pa, _, _ = spec.start.at(np.array([spec.start.lo, spec.start.hi]))
+    pb, _, _ = spec.end.at(np.array([spec.end.lo, spec.end.hi]))
+    run, shift = np.abs(pb[:, 0] - pa[0, 0]), np.abs(pb[:, 1] - pa[0, 1])
+    assert run == pytest.approx([80.0, 100.0]) and shift == pytest.approx([12.0, 12.0])
+    assert (run.max() ** 2 + 12.0 ** 2) / 48.0 == pytest.approx(211.33, abs=0.01)
+    rooms = {r.ramp: r for r in shift_rooms(topo)}
+    assert rooms["r3"].road == "way50427247N" and rooms["r4"].road == "way50427247S"
+    assert rooms["r3"].allows(210.0, 4) and not rooms["r3"].allows(280.0, 4)
+    assert rooms["r3"].allows(280.0, 3) and not rooms["r3"].allows(float("inf"), 3)
+
+
+def test_no_catalog_design_has_a_ramp_between_fixed_windows():
+    """Only DC's continuation ramps have both windows fixed by the layout: the catalog's
+    domains are unchanged."""
+    from flyover.geometry.feasibility import fixed_window_ramps, shift_rooms  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    for name, t in catalog_topologies().items():
+        assert not fixed_window_ramps(t) and not shift_rooms(t), name

@@ -82,6 +82,25 @@ True
 False
 >>> [(p.connector, p.loop) for p in round_loops(catalog_topologies()["cloverleaf_cd"])][:2]
 [('oA1', 'lB1'), ('oA2', 'lB2')]
+
+**Shifts their room holds.** A level ramp whose both windows the road layout fixes before
+any fit (:func:`fixed_window_ramps`: a ramp straight on from one expressway to the next
+that continues it, DC's ``r3`` / ``r4``, attached by the one's end and within ``gap_m / 2``
+beyond ``gap_m`` from the other's start; no catalog design has one) shifts sideways
+between them, within a run the layout fixes. An S-shift of lateral offset ``d`` with two
+arcs of radius ``R`` takes a run of ``2 R sin(θ)`` with ``d = 2 R (1 - cos θ)``: no radius
+above ``(L² + d²) / (4 d)`` fits in a run ``L``, and a ramp drawn one goes round a loop
+or misses it. So every radius whose shortest path between the windows (at 0.95 × it, as
+:meth:`flyover.geometry.specs.RampSpecs.least_m` bounds the fit) exceeds the length the
+ramp may attach within, ``(1 + length_margin)`` × what it needs
+(:meth:`flyover.geometry.specs.RampSpecs.need_m`), is forbidden on it, and ``inf`` where it
+must shift (it cannot be straight). The shift follows from the lanes of the road it
+leaves or joins (the next expressway runs in its partner's median, beside its lanes), so
+a rule names the (radius, lanes) it cannot build (:func:`shift_rooms`). None where no
+radius is excluded.
+
+>>> shift_rooms(catalog_topologies()["j1"])
+()
 """
 
 from __future__ import annotations
@@ -90,24 +109,33 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
-from flyover.geometry.chains import Movements, continuations
+import numpy as np
+
+from flyover.geometry.chains import Movements, continuations, wrap
 from flyover.geometry.chains import ends as _ends
 from flyover.geometry.levels import LevelPlan
 from flyover.geometry.profile import climb_distance
 from flyover.geometry.roads import layout_roads
-from flyover.geometry.settings import LayoutSettings
-from flyover.sampling.model import ElementCondition, Feature, ForbidRule, Profile, Relation
-from flyover.topology.model import Kind, Topology
+from flyover.geometry.settings import LayoutSettings, RampFeatures
+from flyover.geometry.state import LayoutState
+from flyover.sampling.model import (
+    ElementCondition, Feature, ForbidRule, Profile, Relation, default_profile,
+)
+from flyover.topology.model import Kind, Label, Topology
 
 __all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "straight_connectors",
            "fixed_features", "turning_ramps",
-           "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m"]
+           "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m",
+           "SHIFT_M", "fixed_window_ramps", "ShiftRoom", "shift_rooms"]
 
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
 
 #: a ramp whose chain connects roads at least this far apart in heading (rad) must turn
 TURNING_RAD = 0.5
+
+#: a ramp whose windows lie this far apart sideways (m) or more must shift: not straight
+SHIFT_M = 0.5
 
 
 def _movements(topology: Topology, settings: LayoutSettings | None = None) -> Movements:
@@ -320,8 +348,9 @@ def forbidden_features(topology: Topology, profile: Profile | None = None,
     slope) of ``profile``'s domain whose need (:func:`ramp_need_m`) exceeds
     ``max_ramp_length_m`` (the ``settings``, else the defaults), and every (connector
     radius, loop radius) of an outer connector and its loop (:func:`round_loops`) that
-    :meth:`RoundLoop.allows` does not. For ``extra=`` of
-    :func:`flyover.sampling.sample.sample_topology`."""
+    :meth:`RoundLoop.allows` does not, and every (radius, lanes of the road that sets its
+    shift) a level ramp between two fixed windows cannot hold (:func:`shift_rooms`). For
+    ``extra=`` of :func:`flyover.sampling.sample.sample_topology`."""
     st = settings or LayoutSettings()
     domain = profile.domain(Kind.RAMP) if profile is not None else {}
     radii = domain.get(Feature.RADIUS_M, (math.inf,))
@@ -347,4 +376,139 @@ def forbidden_features(topology: Topology, profile: Profile | None = None,
                                       pair.connector),
                      ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, tight),), pair.loop)),
                     Relation.ANY))
+    if profile is not None:
+        for room in shift_rooms(topology, profile, st):
+            for lanes, radii_out in room.excluded:
+                ramp_cond = ElementCondition(Kind.RAMP, ((Feature.RADIUS_M, radii_out),),
+                                             room.ramp)
+                if room.road is None:
+                    rules.append(ForbidRule((ramp_cond,)))
+                else:
+                    rules.append(ForbidRule(
+                        (ramp_cond, ElementCondition(
+                            Kind.ROAD, ((Feature.LANES, frozenset({float(lanes)})),),
+                            room.road)), Relation.ANY))
     return tuple(rules)
+
+
+def fixed_window_ramps(topology: Topology, moves: Movements | None = None) -> frozenset[str]:
+    """The ramps both of whose windows the road layout fixes before any fit: both ends on
+    roads, each held by the road's end (a ramp straight on to the next expressway,
+    :func:`flyover.geometry.chains.continuations`; an ``Out-M`` / ``In-M`` end, or a
+    ``pos`` at 0 / 1 on a road that ends there), as
+    :meth:`flyover.geometry.rails.AttachmentWindows.road_rail` places them. Only DC's
+    ``r3`` / ``r4`` of the 11 designs and 14 OSM interchanges."""
+    g = topology.graph
+    moves = moves or _movements(topology)
+    roads = moves.roads
+
+    def held(ramp: str, end, is_start: bool) -> bool:
+        node, label = end
+        r = roads[node]
+        pos = g.edges[(node, ramp) if is_start else (ramp, node)].get("pos")
+        return ramp in moves.continuing \
+            or label in (Label.OUT_M, Label.IN_M) \
+            or (pos is not None and pos >= 0.99 and math.isfinite(r.t_hi)) \
+            or (pos is not None and pos <= 0.01 and math.isfinite(r.t_lo))
+
+    out = set()
+    for ramp in topology.ramps:
+        start, end = _ends(topology, ramp)
+        if start is not None and end is not None and start[0] in roads and end[0] in roads \
+                and held(ramp, start, True) and held(ramp, end, False):
+            out.add(ramp)
+    return frozenset(out)
+
+
+@dataclass(frozen=True)
+class ShiftRoom:
+    """The radii a level ramp between two fixed windows cannot be built with
+    (:func:`shift_rooms`).
+
+    Attributes
+    ----------
+    ramp
+        Ramp id.
+    road
+        The road whose lanes set the shift between its windows (``None``: no sampled
+        lanes do).
+    excluded
+        ``(lanes, radii)``: for each lanes of ``road`` (``None`` without one), the radius
+        targets its room cannot hold.
+    """
+
+    ramp: str
+    road: str | None
+    excluded: tuple[tuple[int | None, frozenset[float]], ...]
+
+    def allows(self, radius_m: float, lanes: int | None = None) -> bool:
+        """Whether a radius target can be built with ``lanes`` on :attr:`road`."""
+        return radius_m not in dict(self.excluded).get(
+            None if self.road is None else int(lanes), frozenset())
+
+
+def _shift_excluded(topology: Topology, ramp: str, lanes: dict[str, int],
+                    radii: tuple[float, ...], st: LayoutSettings) -> frozenset[float]:
+    """The radii of ``radii`` that ``ramp``'s fixed windows cannot hold with ``lanes``: a
+    shortest path between them (at 0.95 × the radius) longer than ``(1 + length_margin)``
+    × what it needs (``max_ramp_length_m`` without a margin); ``inf`` where it must shift."""
+    state = LayoutState(topology, lanes, {}, st, 0)
+    start, end = _ends(topology, ramp)
+    out = set()
+    for r in radii:
+        feat = RampFeatures(r, LEVEL_SLOPE_PCT)
+        spec = state.spec(ramp, feat)
+        if math.isinf(r):
+            pa, ha, _ = spec.start.at(np.linspace(spec.start.lo, spec.start.hi, 24))
+            pb, hb, _ = spec.end.at(np.linspace(spec.end.lo, spec.end.hi, 24))
+            d = pb[None, :, :] - pa[:, None, :]
+            side = np.abs(np.cos(ha)[:, None] * d[..., 1] - np.sin(ha)[:, None] * d[..., 0])
+            turn = np.abs(wrap(hb[None, :] - ha[:, None]))
+            if float(side.min()) >= SHIFT_M or float(turn.min()) >= 1e-3:
+                out.add(r)
+            continue
+        need = state.specs.need_m(spec.turn_rad, feat, start, end)
+        bound = st.max_ramp_length_m if st.length_margin is None \
+            else (1.0 + st.length_margin) * need
+        if spec.least_m > bound:
+            out.add(r)
+    return frozenset(out)
+
+
+def shift_rooms(topology: Topology, profile: Profile | None = None,
+                settings: LayoutSettings | None = None) -> tuple[ShiftRoom, ...]:
+    """Every level ramp with both windows fixed by the layout (:func:`fixed_window_ramps`,
+    :func:`level_ramps`) whose room cannot hold some radius of ``profile``'s domain (the
+    default profile without one), for each lanes of the road that sets its shift: its
+    windows on the layout of :class:`flyover.geometry.state.LayoutState` (nothing
+    fitted; the shift does not depend on the slopes, which move both terminals alike),
+    each lanes of its two roads tried; a road whose lanes change nothing is not named,
+    and where both do, a radius is excluded for one's lanes only if no lanes of the other
+    hold it. In ramp id order; ramps with nothing excluded are left out."""
+    st = settings or LayoutSettings()
+    prof = profile or default_profile()
+    radii = tuple(prof.domain(Kind.RAMP).get(Feature.RADIUS_M, ()))
+    choices = tuple(int(v) for v in prof.domain(Kind.ROAD).get(Feature.LANES, ())) or (None,)
+    moves = _movements(topology, st)
+    level = level_ramps(topology, moves)
+    out = []
+    for ramp in sorted(fixed_window_ramps(topology, moves) & level):
+        (a, _), (b, _) = _ends(topology, ramp)
+        ex = {(na, nb): _shift_excluded(topology, ramp,
+                                        {k: v for k, v in ((a, na), (b, nb)) if v is not None},
+                                        radii, st)
+              for na in choices for nb in choices}
+        by_a = {na: frozenset.intersection(*(ex[na, nb] for nb in choices)) for na in choices}
+        by_b = {nb: frozenset.intersection(*(ex[na, nb] for na in choices)) for nb in choices}
+        if len(set(ex.values())) == 1:
+            road, excluded = None, {None: next(iter(ex.values()))}
+        elif all(ex[na, nb] == by_a[na] for na in choices for nb in choices):
+            road, excluded = a, by_a
+        elif all(ex[na, nb] == by_b[nb] for na in choices for nb in choices):
+            road, excluded = b, by_b
+        else:  # both matter: only what no lanes of the other hold
+            road, excluded = a, by_a
+        if any(excluded.values()):
+            out.append(ShiftRoom(ramp, road, tuple(sorted(
+                ((k, v) for k, v in excluded.items() if v), key=lambda kv: kv[0] or 0))))
+    return tuple(out)

@@ -17,7 +17,10 @@
 # 8: DC's E Street Expressway meets the I-66 line at a junction of its own (GEOMETRY 37):
 #    r5 turns right by 90 degrees on one level, a level ramp (slope fixed at 0); r8 and r13
 #    are no loops (they join on the left); the other classes unchanged
-SAMPLING_VERSION = 8
+# 9: a level ramp between two windows the layout fixes (feasibility.shift_rooms: DC's
+#    continuation ramps r3 / r4) is sampled only radii its sideways shift can be built
+#    with at its road's lanes (no inf); the other classes unchanged (no such ramp)
+SAMPLING_VERSION = 9
 
 
 rule sample_class:
