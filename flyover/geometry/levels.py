@@ -44,7 +44,7 @@ from flyover.geometry.chains import Movements, ends, road_of, wrap
 from flyover.geometry.profile import loop_radius
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
 
-__all__ = ["LevelPlan"]
+__all__ = ["LevelPlan", "round_diagonal"]
 
 
 class LevelPlan:
@@ -186,14 +186,15 @@ class LevelPlan:
         """Room toward the crossing where ``ramp`` starts (ends) on a stub, if it is the
         outer connector of a loop (:meth:`Movements.goes_round_loop`, on a road both
         attach to), so that it can go round the loop without an S-bend
-        (:meth:`_diagonal`). 0 otherwise."""
+        (:func:`round_diagonal`). 0 otherwise."""
         moves = self.moves
         mine = {e[0] for e in moves.ends(ramp) if e is not None and e[0] in self.roads}
         for loop in moves.topo.ramps:
             theirs = {e[0] for e in moves.ends(loop) if e is not None and e[0] in self.roads}
             if loop in self.features and ramp in self.features and any(
                     moves.goes_round_loop(ramp, loop, road) for road in sorted(mine & theirs)):
-                return self._diagonal(ramp, loop, [self.roads[r].z for r in theirs])
+                zs = [self.roads[r].z for r in theirs]
+                return round_diagonal(self.moves, self.features, self.st, ramp, loop, zs)
         return 0.0
 
     def collector_room(self, cd: str) -> tuple[float, float]:
@@ -202,7 +203,7 @@ class LevelPlan:
         the outer connector leaving it before the loop joins it goes round that loop
         (``cloverleaf_cd``'s ``oA1`` leaving ``cA1`` round ``lB1``), and the one joining it
         after the loop leaves it round that one (``oB2`` round ``lA1``): the connector's
-        diagonal (:meth:`_diagonal`) from the corner of the two C-D roads (their offset
+        diagonal (:func:`round_diagonal`) from the corner of the two C-D roads (their offset
         from their carriageways' edges), moved out by as far as the loop may join or leave
         them beyond the crossing's room (``stub_window_m``,
         :meth:`flyover.geometry.loop_room.LoopRoom.on_collector`). 0 at an end with no such
@@ -229,26 +230,28 @@ class LevelPlan:
             zs = [self.roads[r].z for r in (moves.road_of(loop, False), moves.road_of(loop, True))
                   if r in self.roads]
             end = 0 if pos[0] < pos[1] else 1
-            out[end] = max(out[end], corner + self._diagonal(conn, loop, zs))
+            room = round_diagonal(moves, self.features, st, conn, loop, zs)
+            out[end] = max(out[end], corner + room)
         return out[0], out[1]
 
-    def _diagonal(self, ramp: str, loop: str, zs: list[float]) -> float:
-        """How far from the corner of the two roads a loop joins the outer connector
-        ``ramp`` must leave (join) the road it shares with ``loop`` to go round it: a loop of
-        radius ``R`` (or, if its climb between its roads at heights ``zs`` at its slope is
-        longer than its turn, the radius of a loop turning that length) in the corner of
-        the two roads reaches ``sqrt(2) R + R`` out along the corner's diagonal (beyond the
-        room ``c`` between their centre lines); a connector running along that diagonal
-        outside it meets the road ``2 R + sqrt(2) (R + c)`` from the corner, and leaves it
-        about half its own radius earlier (a 45° turn), after a taper (``gap_m``)."""
-        st = self.st
 
-        def built(r: float) -> float:
-            return r if math.isfinite(r) else st.fit.inf_reference_m
+def round_diagonal(moves: Movements, features: Mapping[str, RampFeatures], st: LayoutSettings,
+                   ramp: str, loop: str, zs: list[float]) -> float:
+    """How far from the corner of the two roads a loop joins the outer connector
+    ``ramp`` must leave (join) the road it shares with ``loop`` to go round it: a loop of
+    radius ``R`` (or, if its climb between its roads at heights ``zs`` at its slope is
+    longer than its turn, the radius of a loop turning that length) in the corner of
+    the two roads reaches ``sqrt(2) R + R`` out along the corner's diagonal (beyond the
+    room ``c`` between their centre lines); a connector running along that diagonal
+    outside it meets the road ``2 R + sqrt(2) (R + c)`` from the corner, and leaves it
+    about half its own radius earlier (a 45° turn), after a taper (``gap_m``)."""
 
-        c = self.moves.round_gap(ramp, loop, st.ramp_lane_width_m)
-        zs = zs or [0.0]  # its climb between its roads
-        r_loop = loop_radius(built(self.features[loop].radius_m), max(zs) - min(zs),
-                             self.features[loop].slope_pct, st.fit.transition_m)
-        return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
-            + 0.5 * built(self.features[ramp].radius_m) + st.gap_m
+    def built(r: float) -> float:
+        return r if math.isfinite(r) else st.fit.inf_reference_m
+
+    c = moves.round_gap(ramp, loop, st.ramp_lane_width_m)
+    zs = zs or [0.0]  # its climb between its roads
+    r_loop = loop_radius(built(features[loop].radius_m), max(zs) - min(zs),
+                         features[loop].slope_pct, st.fit.transition_m)
+    return 2 * r_loop + math.sqrt(2) * (r_loop + c) \
+        + 0.5 * built(features[ramp].radius_m) + st.gap_m

@@ -113,14 +113,28 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     """Every carriageway of ``topo`` laid out (see the module doc); ``slopes`` (ramp →
     slope target, %) and ``climbing`` size the room at a T's terminals
     (:func:`terminal_room`), none without them."""
+    plan = _Placement.of(topo, lanes, st, slopes or {}, climbing)
+    units = [e for e in plan.order if e not in plan.through_of and e not in plan.tees]
+    base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
+    best, best_score = None, -1e9
+    for flip, side in itertools.product([False, True] if len(units) > 1 else [False],
+                                        [1.0, -1.0] if plan.tees else [0.0]):
+        opts = dict(base)
+        if flip:
+            opts[units[1]] += np.pi
+        roads = plan.place(plan.square(plan.spread(opts, units), side))
+        score = _turn_side_score(topo, roads)
+        if score > best_score:
+            best, best_score = roads, score
+    return best
+
+
+def _cross_section(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
+                   conts: list[Continuation]) -> tuple[dict[str, float], dict[str, float]]:
+    """Across each expressway: each carriageway's reference line (median edge) from the
+    axis (carriageway → m) and the expressway's half width (expressway → m), the median
+    wide enough for ramps running in it and for a continuing partner beside the lanes."""
     exps = topo.expressways
-    term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
-    conts = continuations(topo)
-    tees = tee_junctions(topo)  # T → the pair whose line it meets at a junction of its own
-    kept_of = {c.kept: c for c in conts}  # a pair is placed by its kept expressway
-    through_of = {c.through: c for c in conts}
-    pair = {e: {c.kept, c.through} for c in conts for e in (c.kept, c.through)}
-    order = sorted(exps, key=lambda e: (term_of[e], e not in kept_of, e))
     g = topo.graph
     # ramps leaving or joining a carriageway on its left run in the median: widen it
     left = {e: any(d["label"] in (Label.OUT_L, Label.IN_L) and (u in rs or v in rs)
@@ -137,121 +151,158 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
                 - CONTINUATION_SIDE_M
     half = {e: max(ref[r] for r in rs) + max(lanes.get(r, st.default_lanes) for r in rs)
             * st.lane_width_m + st.shoulder_width_m for e, rs in exps.items()}
+    return ref, half
 
-    # each through expressway on its own level; the terminating ones (half lines in
-    # directions of their own: they never meet) on the one above them all
-    n_through = sum(not term_of[e] for e in exps)
-    level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
-    room = terminal_room(topo, level, slopes or {}, st, climbing)
-    if tees:  # a T at a junction of its own: its ramps climb there, not at the line's terminal
-        exp = {r: e for e, rs in exps.items() for r in rs}
-        own = frozenset(x for x in topo.ramps if tees.keys() & {
-            exp.get(road_of(topo, x, f)) for f in (False, True)})
-        room = terminal_room(topo, level, slopes or {}, st, climbing, own)
-        down, up = _tee_rooms(topo, tees, slopes or {}, st, climbing)
 
-    def inner_of(e: str) -> float:
+def _turn_side_score(topo: Topology, roads: Mapping[str, RoadLine]) -> int:
+    """How well an orientation suits the ramps between square roads: +1 for each end on
+    the side its ramp turns to, -1 for a left end on a right turn."""
+    score = 0
+    for ramp in topo.ramps:
+        a = road_of(topo, ramp, False)
+        b = road_of(topo, ramp, True)
+        if not a or not b:
+            continue
+        raw = wrap(roads[b].heading - roads[a].heading)
+        if abs(abs(raw) - np.pi / 2) > 0.1:
+            continue
+        turn = "left" if raw > 0 else "right"
+        for end in ends(topo, ramp):
+            if end is None or end[1].side == "middle":
+                continue
+            score += 1 if end[1].side == turn else (-1 if end[1].side == "left" else 0)
+    return score
+
+
+@dataclass(frozen=True)
+class _Placement:
+    """What places the carriageways once their expressways' headings are chosen: the
+    order, levels, cross sections and terminal rooms of :func:`layout_roads`."""
+
+    topo: Topology
+    st: LayoutSettings
+    lanes: Mapping[str, int]
+    order: list[str]
+    term_of: dict[str, bool]
+    conts: list[Continuation]
+    tees: dict[str, Continuation]
+    level: dict[str, int]
+    ref: dict[str, float]
+    half: dict[str, float]
+    room: dict[str, float]  # beyond ``terminal_m`` at each terminal
+    down: dict[str, float]  # a T at its own junction: room before it (:func:`_tee_rooms`)
+    up: dict[str, float]  # and after it
+
+    @classmethod
+    def of(cls, topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
+           slopes: Mapping[str, float], climbing: frozenset[str]) -> _Placement:
+        exps = topo.expressways
+        term_of = {e: any(terminal(topo, r) for r in rs) for e, rs in exps.items()}
+        conts = continuations(topo)
+        tees = tee_junctions(topo)  # T → the pair whose line it meets at a junction of its own
+        kept = {c.kept for c in conts}  # a pair is placed by its kept expressway
+        order = sorted(exps, key=lambda e: (term_of[e], e not in kept, e))
+        ref, half = _cross_section(topo, lanes, st, conts)
+        # each through expressway on its own level; the terminating ones (half lines in
+        # directions of their own: they never meet) on the one above them all
+        n_through = sum(not term_of[e] for e in exps)
+        level = {e: (n_through if term_of[e] else k) for k, e in enumerate(order)}
+        room = terminal_room(topo, level, slopes, st, climbing)
+        down: dict[str, float] = {}
+        up: dict[str, float] = {}
+        if tees:  # a T at a junction of its own: its ramps climb there, not at the line's terminal
+            exp = {r: e for e, rs in exps.items() for r in rs}
+            own = frozenset(x for x in topo.ramps if tees.keys() & {
+                exp.get(road_of(topo, x, f)) for f in (False, True)})
+            room = terminal_room(topo, level, slopes, st, climbing, own)
+            down, up = _tee_rooms(topo, tees, slopes, st, climbing)
+        return cls(topo, st, lanes, order, term_of, conts, tees, level, ref, half, room, down, up)
+
+    @property
+    def through_of(self) -> dict[str, Continuation]:
+        return {c.through: c for c in self.conts}
+
+    def _other(self, e: str) -> float:
+        """The widest half width of the expressways ``e`` crosses at the centre."""
+        pair = {x: {c.kept, c.through} for c in self.conts for x in (c.kept, c.through)}
+        exps = self.topo.expressways
+        return max([self.half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
+
+    def inner(self, e: str) -> float:
         """How far from the centre (a T's own junction) along its leg ``e`` begins."""
-        other = max([half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
-        return other + st.terminal_m + room.get(e, 0.0)
+        return self._other(e) + self.st.terminal_m + self.room.get(e, 0.0)
 
-    def place(options: dict[str, float]) -> dict[str, RoadLine]:
+    def leg(self, e: str, h: float) -> float:
+        """The direction from the centre in which ``e``, ending here, runs (heading ``h``)."""
+        return h if terminal(self.topo, self.topo.expressways[e][0]) == "start" else h + np.pi
+
+    def legs(self, e: str, h: float) -> list[float]:
+        """The directions from the centre in which expressway ``e`` (heading ``h``) runs:
+        both for a through one or a pair that continue one another, one for a T's
+        terminating one (a half line)."""
+        if not self.term_of[e]:
+            return [h, h + np.pi]
+        kept = any(c.kept == e for c in self.conts)
+        return [self.leg(e, h)] + ([self.leg(e, h) + np.pi] if kept else [])
+
+    def spread(self, opts: dict[str, float], units: list[str]) -> dict[str, float]:
+        """Headings of the third and further expressways, at 45° steps: each where its
+        legs are farthest from those already placed (a half line needs one free
+        direction, a through expressway two opposite ones); a pair's through one
+        opposite its kept one."""
+        taken = [a for e in units[:2] for a in self.legs(e, opts[e])]
+        for e in units[2:]:
+            cands = [np.pi / 2 - j * np.pi / 4 for j in range(8)]
+            gap = [min((abs(wrap(a - b)) for a in self.legs(e, h) for b in taken), default=np.pi)
+                   for h in cands]
+            opts[e] = cands[int(np.argmax(gap))]
+            taken += self.legs(e, opts[e])
+        for c in self.conts:
+            b = c.through
+            opts[b] = self.leg(c.kept, opts[c.kept]) + np.pi - self.leg(b, 0.0)
+        return opts
+
+    def square(self, opts: dict[str, float], side: float) -> dict[str, float]:
+        """A T meeting a pair's line at its own junction: square to the kept one's leg,
+        on its left (``side`` +1) or right (-1)."""
+        for e, c in self.tees.items():
+            a = self.leg(c.kept, opts[c.kept]) + side * np.pi / 2
+            starts = terminal(self.topo, self.topo.expressways[e][0]) == "start"
+            opts[e] = a if starts else a + np.pi
+        return opts
+
+    def place(self, options: dict[str, float]) -> dict[str, RoadLine]:
+        """Every carriageway on its line, its expressway heading ``options[e]``."""
+        topo, st = self.topo, self.st
+        through_of = self.through_of
         roads = {}
-        for e in order:
-            k = level[e]
-            rs = exps[e]
-            h1 = options[e]
-            other = max([half[x] for x in exps if x != e and x not in pair.get(e, ())] or [0.0])
-            inner = other + st.terminal_m + room.get(e, 0.0)  # from the centre along its leg
+        for e in self.order:
+            k = self.level[e]
+            inner = self.inner(e)  # from the centre along its leg
             if e in through_of and through_of[e].meets:  # on past the centre to its partner
-                inner = -(other + st.terminal_m + room.get(through_of[e].kept, 0.0)
+                inner = -(self._other(e) + st.terminal_m + self.room.get(through_of[e].kept, 0.0)
                           - CONTINUATION_GAP_M)
             at, junction = np.zeros(2), None
-            if e in tees:  # its own junction on the kept one's leg, beyond that one's terminal
-                kept = tees[e].kept
-                a = leg(kept, options[kept])
-                at = (inner_of(kept) + inner + down[e]) * np.array([np.cos(a), np.sin(a)])
+            if e in self.tees:  # its own junction on the kept one's leg, beyond that one's terminal
+                kept = self.tees[e].kept
+                a = self.leg(kept, options[kept])
+                at = (self.inner(kept) + inner + self.down[e]) * np.array([np.cos(a), np.sin(a)])
                 junction = (float(at[0]), float(at[1]))
-                inner += up[e]
-            for i, r in enumerate(rs):
-                h = h1 if i == 0 else h1 + np.pi
-                o = at + ref[r] * np.array([np.sin(h), -np.cos(h)])
+                inner += self.up[e]
+            for i, r in enumerate(topo.expressways[e]):
+                h = options[e] if i == 0 else options[e] + np.pi
+                o = at + self.ref[r] * np.array([np.sin(h), -np.cos(h)])
                 term = terminal(topo, r)
                 t_lo, t_hi = -np.inf, np.inf
                 if term == "end":
                     t_hi = -inner
                 elif term == "start":
                     t_lo = inner
-                n = lanes.get(r, st.default_lanes)
+                n = self.lanes.get(r, st.default_lanes)
                 roads[r] = RoadLine(r, e, int(n), k, k * st.level_height_m,
                                     (float(o[0]), float(o[1])), float(wrap(h)), t_lo, t_hi,
-                                    half[e], junction)
+                                    self.half[e], junction)
         return roads
-
-    def leg(e: str, h: float) -> float:
-        """The direction from the centre in which ``e``, ending here, runs (heading ``h``)."""
-        return h if terminal(topo, exps[e][0]) == "start" else h + np.pi
-
-    def legs(e: str, h: float) -> list[float]:
-        """The directions from the centre in which expressway ``e`` (heading ``h``) runs:
-        both for a through one or a pair that continue one another, one for a T's
-        terminating one (a half line)."""
-        if not term_of[e]:
-            return [h, h + np.pi]
-        return [leg(e, h)] + ([leg(e, h) + np.pi] if e in kept_of else [])
-
-    units = [e for e in order if e not in through_of and e not in tees]
-
-    def spread(opts: dict[str, float]) -> dict[str, float]:
-        """Headings of the third and further expressways, at 45° steps: each where its
-        legs are farthest from those already placed (a half line needs one free
-        direction, a through expressway two opposite ones); a pair's through one
-        opposite its kept one."""
-        taken = [a for e in units[:2] for a in legs(e, opts[e])]
-        for e in units[2:]:
-            cands = [np.pi / 2 - j * np.pi / 4 for j in range(8)]
-            gap = [min((abs(wrap(a - b)) for a in legs(e, h) for b in taken), default=np.pi)
-                   for h in cands]
-            opts[e] = cands[int(np.argmax(gap))]
-            taken += legs(e, opts[e])
-        for c in conts:
-            b = c.through
-            opts[b] = leg(c.kept, opts[c.kept]) + np.pi - leg(b, 0.0)
-        return opts
-
-    def square(opts: dict[str, float], side: float) -> dict[str, float]:
-        """A T meeting a pair's line at its own junction: square to the kept one's leg,
-        on its left (``side`` +1) or right (-1)."""
-        for e, c in tees.items():
-            a = leg(c.kept, opts[c.kept]) + side * np.pi / 2
-            opts[e] = a if terminal(topo, exps[e][0]) == "start" else a + np.pi
-        return opts
-
-    base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
-    best, best_score = None, -1e9
-    for flip, side in itertools.product([False, True] if len(units) > 1 else [False],
-                                        [1.0, -1.0] if tees else [0.0]):
-        opts = dict(base)
-        if flip:
-            opts[units[1]] += np.pi
-        roads = place(square(spread(opts), side))
-        score = 0
-        for ramp in topo.ramps:
-            a = road_of(topo, ramp, False)
-            b = road_of(topo, ramp, True)
-            if not a or not b:
-                continue
-            raw = wrap(roads[b].heading - roads[a].heading)
-            if abs(abs(raw) - np.pi / 2) > 0.1:
-                continue
-            turn = "left" if raw > 0 else "right"
-            for end in ends(topo, ramp):
-                if end is None or end[1].side == "middle":
-                    continue
-                score += 1 if end[1].side == turn else (-1 if end[1].side == "left" else 0)
-        if score > best_score:
-            best, best_score = roads, score
-    return best
 
 
 def _tee_rooms(topo: Topology, tees: Mapping[str, Continuation], slopes: Mapping[str, float],
