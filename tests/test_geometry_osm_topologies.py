@@ -572,6 +572,26 @@ def test_the_radius_bound_of_a_continuations_ramp_is_the_s_shift_its_windows_hol
     assert rooms["r3"].allows(280.0, 3) and not rooms["r3"].allows(float("inf"), 3)
 
 
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_continuations_windows_are_the_same_for_every_radius():
+    """shift_rooms lays out once per lanes combination and tests every radius against one
+    spec's windows: held by the roads' ends, they must not move with the radius target
+    (else a radius would be tested against another's windows)."""
+    from flyover.geometry.feasibility import fixed_window_ramps  # noqa: PLC0415
+
+    topo = _dc()
+    radii = (float("inf"), 280.0, 210.0, 150.0, 100.0, 60.0, 40.0, 30.0)
+    for lanes in ({}, {"way50427247N": 5, "I66N": 3}, {"way50427247S": 3, "I66S": 5}):
+        b = LayoutState(topo, lanes, {}, LayoutSettings(), 0)
+        for ramp in sorted(fixed_window_ramps(topo)):
+            specs = [b.spec(ramp, RampFeatures(r, 0.0)) for r in radii]
+            for rail in ("start", "end"):
+                got = {(getattr(s, rail).lo, getattr(s, rail).hi,
+                        tuple(np.round(getattr(s, rail).at(np.array([getattr(s, rail).lo]))[0]
+                                       .ravel(), 9))) for s in specs}
+                assert len(got) == 1, (ramp, rail, lanes)
+
+
 def test_no_catalog_design_has_a_ramp_between_fixed_windows():
     """Only DC's continuation ramps have both windows fixed by the layout: the catalog's
     domains are unchanged."""
