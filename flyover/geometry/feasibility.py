@@ -119,14 +119,15 @@ from flyover.geometry.roads import layout_roads
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
 from flyover.sampling.model import (
-    ElementCondition, Feature, ForbidRule, Profile, Relation, default_profile,
+    ElementCondition, Feature, FeatureModel, ForbidRule, Profile, Relation, default_profile,
+    feature_model,
 )
 from flyover.topology.model import Kind, Label, Topology
 
 __all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "straight_connectors",
            "fixed_features", "turning_ramps",
            "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m",
-           "SHIFT_M", "fixed_window_ramps", "ShiftRoom", "shift_rooms"]
+           "SHIFT_M", "fixed_window_ramps", "ShiftRoom", "shift_rooms", "sampling_model"]
 
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
@@ -526,3 +527,15 @@ def shift_rooms(topology: Topology, profile: Profile | None = None,
             out.append(ShiftRoom(ramp, road, tuple(sorted(
                 ((k, v) for k, v in excluded.items() if v), key=lambda kv: kv[0] or 0))))
     return tuple(out)
+
+
+def sampling_model(topology: Topology, profile: Profile,
+                   settings: LayoutSettings | None = None) -> FeatureModel:
+    """The feature model sampling covers for ``topology`` under ``profile``: its domains and
+    rules, every feature value geometry cannot build (:func:`forbidden_features`, with the
+    ``settings``) and the features it fixes (:func:`fixed_features`), as rule
+    ``sample_class`` gives them to :func:`flyover.sampling.sample.sample_topology`. The
+    geometry stage's resampler (:class:`flyover.geometry.tables.DomainResampler`) draws
+    only what it allows."""
+    return feature_model(topology, profile, forbidden_features(topology, profile, settings),
+                         fixed_features(topology))
