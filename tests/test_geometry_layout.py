@@ -193,6 +193,28 @@ def test_the_resampler_draws_only_what_sampling_allows():
     assert any(plain("rL", k, {}).slope_pct == 1.0 for k in range(1, 61))
 
 
+def test_the_resampler_keeps_round_loops_from_the_sampling_rules():
+    """Given the topology, the round-loop rule comes from the sampling model too: a
+    cloverstack connector draws only radii wider than its loop's target in force, a loop
+    only narrower than its connector's; with its loop at 280 m (no radius of the domain
+    is wide enough) a connector still draws no ``inf`` (it must turn)."""
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
+    from flyover.geometry.tables import domain_resampler  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverstack"]
+    pair = round_loops(t)[0]  # oA1 round lB1
+    domain = (30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf)
+    sets = {k: ({r: 3 + k % 3 for r in t.roads},
+                {r: RampFeatures(domain[(k + i) % 8], float(1 + (k + 2 * i) % 5))
+                 for i, r in enumerate(t.ramps)}) for k in range(10)}
+    res = domain_resampler(sets, 3, t, LayoutSettings(), sample=0)
+    radii = {pair.connector: 60.0, pair.loop: 150.0}
+    assert all(pair.allows(res(pair.connector, k, radii).radius_m, 150.0) for k in range(1, 41))
+    assert all(pair.allows(60.0, res(pair.loop, k, radii).radius_m) for k in range(1, 41))
+    wide = {res(pair.connector, k, {pair.loop: 280.0}).radius_m for k in range(1, 41)}
+    assert math.inf not in wide and len(wide) > 3
+
+
 def test_the_resampler_is_given_the_radius_targets_in_force():
     t = catalog_topologies()["parclo_adjacent"]
     feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}
