@@ -127,7 +127,8 @@ def main() -> None:
             own = sample_seed(seed, cid, sample)
             ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
                               settings=settings,
-                              resampler=tries.resampler(domain_resampler(sets, own, topo, settings)))
+                              resampler=tries.resampler(domain_resampler(sets, own, topo, settings,
+                                                                               sample)))
             for o in ic.outcomes:
                 total += 1
                 if o.first_try_ok:

@@ -155,7 +155,7 @@ def _build(job: tuple[str, int]) -> tuple:
     try:
         ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
                           settings=settings,
-                          resampler=domain_resampler(sets, own, topo, settings))
+                          resampler=domain_resampler(sets, own, topo, settings, sample))
     except FlyoverError as exc:  # one interchange that cannot be built: its line, not a crash
         return name, sample, time.process_time() - t0, exc.located(where).one_line()
     secs = time.process_time() - t0

@@ -44,7 +44,7 @@ def main() -> None:
                 ic = build_sample(topo, sets[s], class_id=cid, sample=s, seed=seed,
                                   settings=settings,
                                   resampler=domain_resampler(sets, sample_seed(seed, cid, s),
-                                                             topo, settings))
+                                                             topo, settings, s))
                 write_sample(ic, f"{d}/g.json", f"{d}/g.parquet")
                 digest = hashlib.sha256(Path(f"{d}/g.json").read_bytes()).hexdigest()[:16]
                 print(name, s, digest, flush=True)

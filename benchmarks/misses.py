@@ -50,7 +50,7 @@ def main() -> None:
         for sample in sorted(sets):
             ic = build_sample(topo, sets[sample], class_id=cid, sample=sample, seed=seed,
                               settings=settings, resampler=domain_resampler(
-                                  sets, sample_seed(seed, cid, sample), topo, settings))
+                                  sets, sample_seed(seed, cid, sample), topo, settings, sample))
             misses += [(sample, o) for o in ic.outcomes if not o.first_try_ok or o.infeasible]
         print(f"{name} ({cid}): {len(misses)} ramps missing at the first try or recorded "
               f"infeasible", flush=True)

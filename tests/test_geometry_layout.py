@@ -155,6 +155,66 @@ def test_a_resampled_outer_connector_stays_wider_than_its_loop_and_the_loop_narr
     assert {kept(pair.connector, k, {}).radius_m for k in range(1, 41)} == set(domain)
 
 
+def test_the_resampler_draws_only_what_sampling_allows():
+    """Sampling forbids slope 1 % on the directional T's left turn rL at any radius (its
+    climb over the through road would make it longer than ``max_ramp_length_m``:
+    :func:`flyover.geometry.feasibility.forbidden_features`); the resampler drew it (it
+    read only inf and the round-loop rule from the feature sets). Given the topology it
+    draws from the class's feature model as sampling covers it (one source of the rules):
+    every draw is a row sampling allows; a ramp without such a rule draws every slope."""
+    from flyover.geometry.feasibility import sampling_model  # noqa: PLC0415
+    from flyover.geometry.tables import domain_resampler  # noqa: PLC0415
+    from flyover.sampling.model import Feature, default_profile  # noqa: PLC0415
+
+    t = catalog_topologies()["directional_t"]
+    domain = (30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf)
+    sets = {k: ({r: 3 + k % 3 for r in t.roads},
+                {r: RampFeatures(domain[(k + i) % 8], float(1 + (k + 2 * i) % 5))
+                 for i, r in enumerate(t.ramps)}) for k in range(10)}
+    res = domain_resampler(sets, 11, t, LayoutSettings(), sample=0)
+    draws = [res("rL", k, {}) for k in range(1, 61)]
+    assert all(f.slope_pct != 1.0 for f in draws)
+    assert {f.slope_pct for f in draws} == {2.0, 3.0, 4.0, 5.0}
+    assert {f.slope_pct for f in (res("rR", k, {}) for k in range(1, 61))} == \
+        {1.0, 2.0, 3.0, 4.0, 5.0}
+    # each draw, in sample 0's feature row, is one the sampling model allows
+    model = sampling_model(t, default_profile(), LayoutSettings())
+    lanes, ramps = sets[0]
+    for f in draws:
+        values = {**{(r, Feature.LANES): float(n) for r, n in lanes.items()},
+                  **{(r, Feature.RADIUS_M): g.radius_m for r, g in ramps.items()},
+                  **{(r, Feature.SLOPE_PCT): g.slope_pct for r, g in ramps.items()},
+                  ("rL", Feature.RADIUS_M): f.radius_m, ("rL", Feature.SLOPE_PCT): f.slope_pct}
+        row = {i: p.values.index(values[p.element, p.feature])
+               for i, p in enumerate(model.parameters)}
+        assert not any(forb.matches(row) for forb in model.forbidden), f
+    # without the topology (the rules read from the feature sets alone) 1 % is drawn
+    plain = domain_resampler(sets, 11)
+    assert any(plain("rL", k, {}).slope_pct == 1.0 for k in range(1, 61))
+
+
+def test_the_resampler_keeps_round_loops_from_the_sampling_rules():
+    """Given the topology, the round-loop rule comes from the sampling model too: a
+    cloverstack connector draws only radii wider than its loop's target in force, a loop
+    only narrower than its connector's; with its loop at 280 m (no radius of the domain
+    is wide enough) a connector still draws no ``inf`` (it must turn)."""
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
+    from flyover.geometry.tables import domain_resampler  # noqa: PLC0415
+
+    t = catalog_topologies()["cloverstack"]
+    pair = round_loops(t)[0]  # oA1 round lB1
+    domain = (30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, math.inf)
+    sets = {k: ({r: 3 + k % 3 for r in t.roads},
+                {r: RampFeatures(domain[(k + i) % 8], float(1 + (k + 2 * i) % 5))
+                 for i, r in enumerate(t.ramps)}) for k in range(10)}
+    res = domain_resampler(sets, 3, t, LayoutSettings(), sample=0)
+    radii = {pair.connector: 60.0, pair.loop: 150.0}
+    assert all(pair.allows(res(pair.connector, k, radii).radius_m, 150.0) for k in range(1, 41))
+    assert all(pair.allows(60.0, res(pair.loop, k, radii).radius_m) for k in range(1, 41))
+    wide = {res(pair.connector, k, {pair.loop: 280.0}).radius_m for k in range(1, 41)}
+    assert math.inf not in wide and len(wide) > 3
+
+
 def test_the_resampler_is_given_the_radius_targets_in_force():
     t = catalog_topologies()["parclo_adjacent"]
     feats = {r: RampFeatures(150.0, 4.0) for r in t.ramps}

@@ -572,6 +572,53 @@ def test_the_radius_bound_of_a_continuations_ramp_is_the_s_shift_its_windows_hol
     assert rooms["r3"].allows(280.0, 3) and not rooms["r3"].allows(float("inf"), 3)
 
 
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_continuations_windows_are_the_same_for_every_radius():
+    """shift_rooms lays out once per lanes combination and tests every radius against one
+    spec's windows: held by the roads' ends, they must not move with the radius target
+    (else a radius would be tested against another's windows)."""
+    from flyover.geometry.feasibility import fixed_window_ramps  # noqa: PLC0415
+
+    topo = _dc()
+    radii = (float("inf"), 280.0, 210.0, 150.0, 100.0, 60.0, 40.0, 30.0)
+    for lanes in ({}, {"way50427247N": 5, "I66N": 3}, {"way50427247S": 3, "I66S": 5}):
+        b = LayoutState(topo, lanes, {}, LayoutSettings(), 0)
+        for ramp in sorted(fixed_window_ramps(topo)):
+            specs = [b.spec(ramp, RampFeatures(r, 0.0)) for r in radii]
+            for rail in ("start", "end"):
+                got = {(getattr(s, rail).lo, getattr(s, rail).hi,
+                        tuple(np.round(getattr(s, rail).at(np.array([getattr(s, rail).lo]))[0]
+                                       .ravel(), 9))) for s in specs}
+                assert len(got) == 1, (ramp, rail, lanes)
+
+
+@pytest.mark.skipif(not DC.is_file(), reason=f"no real OSM extract at {DC}")
+def test_a_continuations_ramp_is_resampled_only_radii_its_shift_can_be_built_with():
+    """Sampling forbids r3 280 m and inf with 4 lanes on way50427247N, and 210 m too with 5
+    (:func:`flyover.geometry.feasibility.shift_rooms`). The resampler, given the topology
+    and the sample, draws from the same rules with that sample's lanes (it drew 280 m
+    and inf again); with 3 lanes 280 m is drawn."""
+    from flyover.geometry.tables import DomainResampler, domain_resampler  # noqa: PLC0415
+
+    topo = _dc()
+    level = {r for r, f in fixed_features(topo) if f is Feature.SLOPE_PCT}
+    radii = (30.0, 40.0, 60.0, 100.0, 150.0, 210.0, 280.0, float("inf"))
+    sets = {n - 3: ({r: n for r in topo.roads},
+                    {r: RampFeatures(radii[(n + i) % 8], 0.0 if r in level else float(n))
+                     for i, r in enumerate(topo.ramps)}) for n in (3, 4, 5)}
+    drawn = {}
+    for k, n in enumerate((3, 4, 5)):
+        res = domain_resampler(sets, 5, topo, LayoutSettings(), sample=k)
+        drawn[n] = {res("r3", a, {}).radius_m for a in range(1, 81)}
+        assert all(res("r3", a, {}).slope_pct == 0.0 for a in range(1, 4))
+    assert float("inf") not in drawn[3] and 280.0 in drawn[3]
+    assert not drawn[4] & {280.0, float("inf")} and 210.0 in drawn[4]
+    assert not drawn[5] & {210.0, 280.0, float("inf")} and 150.0 in drawn[5]
+    # the draws without the rules do break them (so the assertions above can fail)
+    plain = DomainResampler(radii, (3.0, 4.0, 5.0), frozenset(level), 5)
+    assert {plain("r3", a, {}).radius_m for a in range(1, 81)} >= {280.0, float("inf")}
+
+
 def test_no_catalog_design_has_a_ramp_between_fixed_windows():
     """Only DC's continuation ramps have both windows fixed by the layout: the catalog's
     domains are unchanged."""

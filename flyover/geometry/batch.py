@@ -77,7 +77,7 @@ def _build_one(topo, feature_sets, folder: Path, class_id: str, seed: int,
         ic = build_sample(topo, fs, class_id=class_id, sample=sample, seed=seed,
                           settings=settings,
                           resampler=domain_resampler(feature_sets, sample_seed(seed, class_id, sample),
-                                                     topo, settings))
+                                                     topo, settings, sample))
         write_geometry(ic.geometry, path)
     except Exception as exc:  # noqa: BLE001 - one interchange's failure is its rows
         if isinstance(exc, FlyoverError):

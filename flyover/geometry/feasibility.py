@@ -119,14 +119,15 @@ from flyover.geometry.roads import layout_roads
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
 from flyover.sampling.model import (
-    ElementCondition, Feature, ForbidRule, Profile, Relation, default_profile,
+    ElementCondition, Feature, FeatureModel, ForbidRule, Profile, Relation, default_profile,
+    feature_model,
 )
 from flyover.topology.model import Kind, Label, Topology
 
 __all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "straight_connectors",
            "fixed_features", "turning_ramps",
            "RoundLoop", "round_loops", "forbidden_features", "ramp_need_m",
-           "SHIFT_M", "fixed_window_ramps", "ShiftRoom", "shift_rooms"]
+           "SHIFT_M", "fixed_window_ramps", "ShiftRoom", "shift_rooms", "sampling_model"]
 
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
@@ -447,17 +448,24 @@ class ShiftRoom:
             None if self.road is None else int(lanes), frozenset())
 
 
-def _shift_excluded(topology: Topology, ramp: str, lanes: dict[str, int],
-                    radii: tuple[float, ...], st: LayoutSettings) -> frozenset[float]:
-    """The radii of ``radii`` that ``ramp``'s fixed windows cannot hold with ``lanes``: a
-    shortest path between them (at 0.95 × the radius) longer than ``(1 + length_margin)``
-    × what it needs (``max_ramp_length_m`` without a margin); ``inf`` where it must shift."""
-    state = LayoutState(topology, lanes, {}, st, 0)
-    start, end = _ends(topology, ramp)
+def _shift_excluded(state: LayoutState, ramp: str, radii: tuple[float, ...]
+                    ) -> frozenset[float]:
+    """The radii of ``radii`` that ``ramp``'s fixed windows cannot hold on ``state``'s
+    layout: a shortest path between them (at 0.95 × the radius,
+    :meth:`flyover.geometry.specs.RampSpecs.least_m`) longer than ``(1 + length_margin)``
+    × what it needs (``max_ramp_length_m`` without a margin); ``inf`` where it must shift.
+    The windows are held by the roads' ends (:func:`fixed_window_ramps`): laid out before
+    any target is read, they are the same for every radius, so one spec gives them and
+    each radius is tested against them alone."""
+    st = state.st
+    start, end = _ends(state.topo, ramp)
+    radii = tuple(radii)
+    if not radii:
+        return frozenset()
+    spec = state.spec(ramp, RampFeatures(radii[0], LEVEL_SLOPE_PCT))
     out = set()
     for r in radii:
         feat = RampFeatures(r, LEVEL_SLOPE_PCT)
-        spec = state.spec(ramp, feat)
         if math.isinf(r):
             pa, ha, _ = spec.start.at(np.linspace(spec.start.lo, spec.start.hi, 24))
             pb, hb, _ = spec.end.at(np.linspace(spec.end.lo, spec.end.hi, 24))
@@ -470,7 +478,9 @@ def _shift_excluded(topology: Topology, ramp: str, lanes: dict[str, int],
         need = state.specs.need_m(spec.turn_rad, feat, start, end)
         bound = st.max_ramp_length_m if st.length_margin is None \
             else (1.0 + st.length_margin) * need
-        if spec.least_m > bound:
+        least = 0.0 if state.moves.same_road(ramp) else \
+            state.specs.least_m(spec.start, spec.end, None, spec.turn_rad, feat)
+        if least > bound:
             out.add(r)
     return frozenset(out)
 
@@ -492,12 +502,17 @@ def shift_rooms(topology: Topology, profile: Profile | None = None,
     moves = _movements(topology, st)
     level = level_ramps(topology, moves)
     out = []
+    states: dict[tuple[tuple[str, int], ...], LayoutState] = {}
     for ramp in sorted(fixed_window_ramps(topology, moves) & level):
         (a, _), (b, _) = _ends(topology, ramp)
-        ex = {(na, nb): _shift_excluded(topology, ramp,
-                                        {k: v for k, v in ((a, na), (b, nb)) if v is not None},
-                                        radii, st)
-              for na in choices for nb in choices}
+        ex = {}
+        for na in choices:
+            for nb in choices:
+                lanes = {k: v for k, v in ((a, na), (b, nb)) if v is not None}
+                key = tuple(sorted(lanes.items()))
+                if key not in states:  # one layout per lanes combination, for every ramp
+                    states[key] = LayoutState(topology, lanes, {}, st, 0)
+                ex[na, nb] = _shift_excluded(states[key], ramp, radii)
         by_a = {na: frozenset.intersection(*(ex[na, nb] for nb in choices)) for na in choices}
         by_b = {nb: frozenset.intersection(*(ex[na, nb] for na in choices)) for nb in choices}
         if len(set(ex.values())) == 1:
@@ -512,3 +527,15 @@ def shift_rooms(topology: Topology, profile: Profile | None = None,
             out.append(ShiftRoom(ramp, road, tuple(sorted(
                 ((k, v) for k, v in excluded.items() if v), key=lambda kv: kv[0] or 0))))
     return tuple(out)
+
+
+def sampling_model(topology: Topology, profile: Profile,
+                   settings: LayoutSettings | None = None) -> FeatureModel:
+    """The feature model sampling covers for ``topology`` under ``profile``: its domains and
+    rules, every feature value geometry cannot build (:func:`forbidden_features`, with the
+    ``settings``) and the features it fixes (:func:`fixed_features`), as rule
+    ``sample_class`` gives them to :func:`flyover.sampling.sample.sample_topology`. The
+    geometry stage's resampler (:class:`flyover.geometry.tables.DomainResampler`) draws
+    only what it allows."""
+    return feature_model(topology, profile, forbidden_features(topology, profile, settings),
+                         fixed_features(topology))

@@ -224,7 +224,11 @@ def class_tables(stage):
 #     loop (chains: DC's r8, r13); a continuation's ramp neither orders nor is ordered by
 #     pos (rails: DC's r4); only DC's file 26 changes (layout_roads identical on the catalog
 #     and the other extracts)
-GEOMETRY_VERSION = 37
+# 38: the resampler (tables.DomainResampler) draws only what sampling allows the class
+#     (feasibility.sampling_model: the same forbidden and fixed features, with the sample's
+#     lanes): DC's r3 / r4 no radius their shift cannot hold, the Ts' rL no 1 % slope; the
+#     catalog's workflow sets never resample those ramps (geometry_bytes 3 identical)
+GEOMETRY_VERSION = 38
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
