@@ -131,11 +131,11 @@ class FreeEnds:
         children (:meth:`flyover.geometry.levels.LevelPlan.continues_level`) keeps none:
         its free end lies where the collector road needs it, which runs on level from it
         past the road ahead, its loop counted from there (:meth:`loop_room`). With half
-        the climb (595 m) Columbus's ``r8`` ended 644 m out instead of 348 m, ``r13``
-        then at the nearest point its loop room allowed, 97 m past I-70, and the loop
-        ``r6`` beside it left ``r11`` no room to go round (drawn set 6). The other stub
-        keeps the rest: the climb less how far the collector's stub, once fitted, lies
-        from its road (all of it before). 0 if there is none."""
+        the climb (595 m) Columbus's ``r8`` ended 644 m out instead of 348 m on drawn set
+        6, ``r13`` then at the nearest point its loop room allowed, 97 m past I-70, and
+        the loop ``r6`` beside I-70 left ``r11`` no room to go round it (``r1``, which
+        ``r11`` leaves, kept out of where it turns and ended 4 m off I-70 West, ``r3``
+        meeting I-70 from there). 0 if there is none."""
         if self._feeds_collector(ramp):
             return 0.0
         out = 0.0
@@ -145,20 +145,8 @@ class FreeEnds:
                 continue
             g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
             climb = float(climb_distance(abs(z - zf), g, self.st.fit.transition_m))
-            share = 0.5 * climb
-            if self._feeds_collector(other):
-                share = climb - self._off_road(other, ramp)
-            out = max(out, share)
+            out = max(out, 0.5 * climb)
         return out
-
-    def waits_for(self, ramp: str) -> list[str]:
-        """The stubs the stub ``ramp`` is fitted after, if they can come first: those at
-        the other end of a child it keeps connector room for (:meth:`connector_room`)
-        that have a collector road among their children, so that it keeps the rest of
-        the climb from where their free ends lie (Columbus's ``r14`` after ``r8``)."""
-        if self._feeds_collector(ramp):
-            return []
-        return sorted({o for _, o in self._connector_ends(ramp) if self._feeds_collector(o)})
 
     def _connector_ends(self, ramp: str) -> list[tuple[str, str]]:
         """(child, other stub) for each child of the stub ``ramp`` that runs from its free
@@ -180,21 +168,6 @@ class FreeEnds:
     def _feeds_collector(self, stub: str) -> bool:
         """Whether a child of ``stub`` is a collector road (goes on level)."""
         return any(self.levels.continues_level(k) for k in self.moves.kids(stub))
-
-    def _off_road(self, stub: str, ramp: str) -> float:
-        """How far (m) the fitted free end of ``stub`` lies from the centre line of the
-        road the stub ``ramp`` attaches to (0 while ``stub`` is not fitted, or when
-        ``ramp`` attaches to no road)."""
-        fit = self.fitted.fits.get(stub)
-        start, end = ends(self.topo, ramp)
-        road = self.roads.get((start or end)[0])
-        if fit is None or road is None:
-            return 0.0
-        o_start, _ = ends(self.topo, stub)
-        pose = fit.end_pose if o_start is not None else fit.start_pose
-        d = np.array([np.cos(road.heading), np.sin(road.heading)])
-        rel = np.array(pose[:2], dtype=float) - np.array(road.origin, dtype=float)
-        return float(abs(rel[0] * d[1] - rel[1] * d[0]))
 
     def loop_room(self, ramp: str, start) -> float | None:
         """How far out (m) a split stub's free end must be when it splits on a fitted ramp

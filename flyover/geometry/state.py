@@ -153,9 +153,6 @@ class LayoutState:
             if self.moves.is_stub(r):
                 rounds[r] = sorted({k for c in self.moves.kids(r) if c in rounds
                                     for k in rounds[c]})
-        for r in todo:  # a stub keeping the rest of a connector's climb waits for the other
-            if self.moves.is_stub(r):
-                rounds[r] = sorted(set(rounds[r]) | set(self.specs.free_ends.waits_for(r)))
         while todo:
             ready, waiting = [], []
             for r in todo:
