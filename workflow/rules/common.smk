@@ -225,10 +225,9 @@ def class_tables(stage):
 #     pos (rails: DC's r4); only DC's file 26 changes (layout_roads identical on the catalog
 #     and the other extracts)
 # 38: a stub with a collector road among its children keeps no connector room (Columbus's
-#     r8: with half r2's climb its end lay 644 m out and r13's loop r6 beside I-70); the
-#     stub at the connector's other end (r14) is fitted after it and keeps the rest of the
-#     climb from where its free end lies (free_end.FreeEnds.connector_room, state.order);
-#     the catalog has no such stub (unchanged)
+#     r8: with half r2's climb its end lay 644 m out, r13's loop r6 beside I-70 and r1
+#     4 m off I-70 West; free_end.FreeEnds.connector_room); the catalog has no such stub
+#     (geometry_bytes unchanged)
 GEOMETRY_VERSION = 38
 
 
