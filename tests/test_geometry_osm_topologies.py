@@ -396,8 +396,12 @@ def test_columbus_stubs_keep_room_for_the_connector_climbing_between_their_free_
     """Columbus: r2 runs from the stub r8's free end (0.5 m, under I-70) to the stub r14's
     (12 m, where r9 comes down from its crest), a low connector without a crest. The two
     free ends kept room for its turn alone: 544-549 m of least path for 1,190 m of climb
-    at 1 % (drawn sets 4-6), and r2 came out at its least, 2.1-2.2 % steep. Now each free
-    end keeps half its climb from the crossing, whatever the seed."""
+    at 1 % (drawn sets 4-6), and r2 came out at its least, 2.1-2.2 % steep. Now r14's
+    free end keeps half its climb from the crossing, whatever the seed. r8, whose child
+    r13 is a collector road running on level from its free end past I-70, keeps none:
+    with half the climb (595 m) its end lay 644 m out on drawn set 6, r13's at the nearest
+    point its loop room allowed (97 m past I-70), and the loop r6 beside I-70 left r11 no
+    room to go round it."""
     from flyover.geometry.profile import climb_distance  # noqa: PLC0415
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
@@ -411,10 +415,16 @@ def test_columbus_stubs_keep_room_for_the_connector_climbing_between_their_free_
     assert (fe.stub_free_z("r8"), fe.stub_free_z("r14")) == pytest.approx((0.5, 12.0))
     climb = float(climb_distance(11.5, 0.01, st.fit.transition_m))
     assert fe.connector_room("r14", 12.0) == pytest.approx(0.5 * climb)
+    assert fe.connector_room("r8", 0.5) == 0.0
     for seed, ramp in enumerate(("r14", "r8")):
         fit, _, _ = _fit_with_levels(b, b.spec(ramp, feats[ramp]), seed)
         b.record(ramp, fit)
-    assert b.spec("r2", feats["r2"]).least_m >= 0.75 * climb
+    # r8's end lies where r13 needs it, not 0.5 * climb (595 m) and more short of I-70
+    q = b.specs.roads["I70E"]
+    d = np.array([np.cos(q.heading), np.sin(q.heading)])
+    rel = np.array(b.fitted.fits["r8"].end_pose[:2]) - np.array(q.origin)
+    assert abs(rel[0] * d[1] - rel[1] * d[0]) < 0.5 * climb
+    assert b.spec("r2", feats["r2"]).least_m >= 0.5 * climb
     # a connector between two stubs at one height keeps no such room
     assert fe.connector_room("r14", 0.5) == pytest.approx(0.0)
 

@@ -120,14 +120,39 @@ class FreeEnds:
     def connector_room(self, ramp: str, zf: float) -> float:
         """Room (m) the free end of the stub ``ramp`` (at height ``zf``) keeps from the
         crossing for a child that runs from it to another stub's free end without a
-        planned crest (:meth:`flyover.geometry.levels.LevelPlan.low_connector`): half that
-        child's climb between the two free ends at its slope target, the other stub
-        keeping the other half, so that the two free ends lie as far apart as it needs to
-        climb. With room for its turn alone (``turn_room`` times its radius) OSM Columbus's
-        ``r2``, from ``r8``'s free end at 0.5 m to ``r14``'s at 12 m, had 544-549 m between
-        them (its least, 60 and 150 m targets) for 1,190 m of climb at 1 %: it came out at
-        its least, 2.1-2.2 % steep. 0 if there is none."""
+        planned crest (:meth:`flyover.geometry.levels.LevelPlan.low_connector`), so that
+        the two free ends lie as far apart as that child needs to climb between them at
+        its slope target. With room for its turn alone (``turn_room`` times its radius)
+        OSM Columbus's ``r2``, from ``r8``'s free end at 0.5 m to ``r14``'s at 12 m, had
+        544-549 m between them (its least, 60 and 150 m targets) for 1,190 m of climb at
+        1 %: it came out at its least, 2.1-2.2 % steep.
+
+        Each stub keeps half that climb, but a stub with a collector road among its
+        children (:meth:`flyover.geometry.levels.LevelPlan.continues_level`) keeps none:
+        its free end lies where the collector road needs it, which runs on level from it
+        past the road ahead, its loop counted from there (:meth:`loop_room`). With half
+        the climb (595 m) Columbus's ``r8`` ended 644 m out instead of 348 m on drawn set
+        6, ``r13`` then at the nearest point its loop room allowed, 97 m past I-70, and
+        the loop ``r6`` beside I-70 left ``r11`` no room to go round it (``r1``, which
+        ``r11`` leaves, kept out of where it turns and ended 4 m off I-70 West, ``r3``
+        meeting I-70 from there). 0 if there is none."""
+        if self._feeds_collector(ramp):
+            return 0.0
         out = 0.0
+        for kid, other in self._connector_ends(ramp):
+            z = self.stub_free_z(other)
+            if z is None:
+                continue
+            g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
+            climb = float(climb_distance(abs(z - zf), g, self.st.fit.transition_m))
+            out = max(out, 0.5 * climb)
+        return out
+
+    def _connector_ends(self, ramp: str) -> list[tuple[str, str]]:
+        """(child, other stub) for each child of the stub ``ramp`` that runs from its free
+        end to another stub's free end without a planned crest
+        (:meth:`flyover.geometry.levels.LevelPlan.low_connector`)."""
+        out = []
         for kid in self.moves.kids(ramp):
             if kid not in self.levels.features or not self.levels.low_connector(kid):
                 continue
@@ -137,13 +162,12 @@ class FreeEnds:
                 o_start, o_end = ends(self.topo, other[0])
                 if (o_end if at_start else o_start) is not None:
                     continue  # not at that ramp's free end
-                z = self.stub_free_z(other[0])
-                if z is None:
-                    continue
-                g = max(self.levels.features[kid].slope_pct, 0.5) / 100.0
-                climb = float(climb_distance(abs(z - zf), g, self.st.fit.transition_m))
-                out = max(out, 0.5 * climb)
+                out.append((kid, other[0]))
         return out
+
+    def _feeds_collector(self, stub: str) -> bool:
+        """Whether a child of ``stub`` is a collector road (goes on level)."""
+        return any(self.levels.continues_level(k) for k in self.moves.kids(stub))
 
     def loop_room(self, ramp: str, start) -> float | None:
         """How far out (m) a split stub's free end must be when it splits on a fitted ramp

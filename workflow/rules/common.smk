@@ -228,6 +228,10 @@ def class_tables(stage):
 #     (feasibility.sampling_model: the same forbidden and fixed features, with the sample's
 #     lanes): DC's r3 / r4 no radius their shift cannot hold, the Ts' rL no 1 % slope; the
 #     catalog's workflow sets never resample those ramps (geometry_bytes 3 identical)
+#     and a stub with a collector road among its children keeps no connector room (Columbus's
+#     r8: with half r2's climb its end lay 644 m out, r13's loop r6 beside I-70 and r1
+#     4 m off I-70 West; free_end.FreeEnds.connector_room); the catalog has no such stub
+#     (geometry_bytes unchanged)
 GEOMETRY_VERSION = 38
 
 
