@@ -465,7 +465,7 @@ def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
             parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
     if not fit.radius_ok and math.isinf(sp.target_radius_m):
         parts.append(f"radius: {min(fit.min_radius_m, fit.point_radius_m):.1f} m, tighter "
-                     f"than the {sp.inf_floor_m:g} m an inf target allows")
+                     f"than 0.95 × the {sp.inf_floor_m:g} m an inf target is built with")
     elif not fit.radius_ok and abs(fit.min_radius_m - sp.target_radius_m) \
             <= 0.05 * sp.target_radius_m:
         parts.append(f"radius: {fit.point_radius_m:.1f} m at a point, tighter than 95 % of "

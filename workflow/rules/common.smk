@@ -224,7 +224,13 @@ def class_tables(stage):
 #     loop (chains: DC's r8, r13); a continuation's ramp neither orders nor is ordered by
 #     pos (rails: DC's r4); only DC's file 26 changes (layout_roads identical on the catalog
 #     and the other extracts)
-GEOMETRY_VERSION = 37
+# 38 (session 37, r12): one reading of an inf radius target (flyover.geometry.straight):
+#     the fit, like the benchmark, holds it to 0.95 x inf_reference_m (250 m), not 0.95 x
+#     30 m (geometry.inf_min_radius_m, removed); a ramp joining its road whose child comes
+#     straight on from a fitted stub's free end runs beside the road a lane off its edge
+#     before it merges, and the child joins it there (beside.beside_run, rails.straight_on:
+#     Columbus's r11 and r12)
+GEOMETRY_VERSION = 38
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
