@@ -18,8 +18,9 @@ into a concrete interchange (layout + DE ramps + resampling). Prints:
   importer's estimator); see :func:`remeasure`;
   slope as dz/ds of the elevation every metre) against the targets of
   geometry.parquet: within 5 % of the radius target (an ``inf`` target: no
-  tighter than ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
-  with) and 0.2 pp of the slope target;
+  tighter than 0.95 × ``inf_reference_m``, 250 m, the radius an ``inf`` ramp is built
+  with: :func:`flyover.geometry.straight.radius_met`, as the fit counts it) and 0.2 pp
+  of the slope target;
 * median / p95 seconds per interchange and per ramp (vectorised DE);
 * the same ramps re-fitted alone with our DE, scipy's vectorised DE and
   scipy's plain (one call per candidate) DE on the same objective and with
@@ -61,6 +62,7 @@ from flyover.osm.geom import min_radius  # noqa: E402
 from flyover.geometry.check import ramp_crossings, same_level_conflicts  # noqa: E402
 from flyover.geometry.fit import fit_ramp  # noqa: E402
 from flyover.geometry.layout import LayoutSettings, RampFeatures  # noqa: E402
+from flyover.geometry.straight import radius_met  # noqa: E402
 from flyover.geometry.tables import (  # noqa: E402
     build_sample, domain_resampler, geometry_rows, read_feature_sets, sample_seed, summary,
     write_sample,
@@ -292,7 +294,7 @@ def need_m(fit, settings) -> float:
 def least_m(fit, settings, n: int = 24) -> float:
     """The least a ramp between two attachment windows can be long (NaN for a stub or a
     collector-distributor road): the longest of the shortest path of curvature at most
-    1 / (0.95 × its radius target) (``inf``: ``inf_min_radius_m``) from a point of its
+    1 / (0.95 × its radius target) (``inf``: ``inf_reference_m``) from a point of its
     start window heading along its parent to one of its end window
     (:func:`flyover.geometry.dubins.shortest`, the windows sampled at ``n`` stations), its
     turn at that radius, and its climb from each end to its crest at its slope target. A
@@ -302,8 +304,8 @@ def least_m(fit, settings, n: int = 24) -> float:
     a, b = sp.start, sp.end
     if a is None or b is None or sp.free is not None or a.parent == b.parent:
         return math.nan
-    r = 0.95 * sp.target_radius_m if math.isfinite(sp.target_radius_m) else \
-        settings.inf_min_radius_m
+    r = 0.95 * (sp.target_radius_m if math.isfinite(sp.target_radius_m) else
+                settings.fit.inf_reference_m)
     pa, ha, _ = a.at(np.linspace(a.lo, a.hi, n))
     pb, hb, _ = b.at(np.linspace(b.lo, b.hi, n))
     path = float(shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r).min())
@@ -477,8 +479,7 @@ def lane_centre_runs(geometry, net, step_m: float = 0.5, tapers: bool = True
 
 def agrees(row: dict, inf_reference_m: float, key: str = "xodr_radius_m") -> tuple[bool, bool]:
     """Whether the re-measured radius (``key``) / slope agree with the row's targets."""
-    t, r = row["target_radius_m"], row[key]
-    radius = r >= 0.95 * inf_reference_m if math.isinf(t) else abs(r - t) <= 0.05 * t
+    radius = radius_met(row[key], row["target_radius_m"], inf_reference_m)  # as the fit
     slope = abs(row["xodr_slope_pct"] - row["target_slope_pct"]) <= 0.2
     return bool(radius), bool(slope)
 

@@ -7,7 +7,8 @@ Bézier piece of ``geometry.json``'s plan, evaluated analytically at ``--per-pie
 parameter values per piece (default 2,000), offset to the lane centre (half the ramp's
 lane width right of its reference line: ``|1/κ + w/2|``), its least value over the whole
 ramp (nothing excluded: the straight leads have none). Target: its radius target, or
-for an ``inf`` target the floor the fit holds it to (``geometry.inf_min_radius_m``).
+for an ``inf`` target the floor the fit holds it to (``inf_reference_m``,
+:func:`flyover.geometry.straight.inf_met`).
 
 Per design it prints the share of ramps whose pointwise minimum is below 0.5 × and below
 0.95 × the target, where the minimum lies (``start``: the ramp's first curved point, at
@@ -42,6 +43,7 @@ import numpy as np
 
 from flyover.config import load_config
 from flyover.geometry.bezier import lane_radius
+from flyover.geometry.layout import LayoutSettings
 from flyover.geometry.model import InterchangeGeometry
 from flyover.topology.canonical import class_id as class_id_of
 from flyover.topology.catalog import catalog_topologies
@@ -174,7 +176,7 @@ def main() -> None:
                          "continuity check (flyover.opendrive.continuity, 1 cm / 0.5 deg)")
     args = ap.parse_args()
     cfg = load_config("config/config.yaml")
-    floor = float(cfg["geometry"].get("inf_min_radius_m", 30.0))
+    floor = LayoutSettings.from_config(cfg["geometry"]).fit.inf_reference_m
     names = {class_id_of(t): n for n, t in catalog_topologies().items()}
     rows = []
     broken: list[str] = []

@@ -161,12 +161,34 @@ def test_inf_radius_turn_is_the_gentlest_curve_and_never_tighter_than_the_floor(
     fit = fit_ramp(spec, seed=2)
     _check_ends(fit)
     rmin, smax = _measured(fit)
-    # far gentler than the tightest radius a finite target could ask for
-    assert rmin > 3 * spec.inf_floor_m and fit.radius_ok and fit.ok
+    # no tighter than the radius an inf ramp is built with (a 90° turn: 356 m)
+    assert rmin > spec.inf_floor_m == FitSettings().inf_reference_m
+    assert fit.radius_ok and fit.ok
     assert abs(smax - 3.0) <= 0.2
     # a kink (or any curve tighter than the floor) is no "straight" ramp
     assert not replace(fit, min_radius_m=0.95 * spec.inf_floor_m - 0.1).radius_ok
     assert replace(fit, min_radius_m=spec.inf_floor_m).radius_ok
+
+
+def test_an_inf_target_is_met_as_the_benchmark_reads_the_exported_xodr():
+    """One reading of ``inf`` (flyover.geometry.straight.inf_met): the fit accepted an
+    ``inf`` target at 0.95 × 30 m (``geometry.inf_min_radius_m``), the benchmark only at
+    0.95 × 250 m, so Columbus's ``r12`` was "ok" with a 29–117 m reverse bend that the
+    radius re-measured from the .xodr counted as a miss."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "geometry.py"
+    mod_spec = importlib.util.spec_from_file_location("geometry_bench", path)
+    bench = importlib.util.module_from_spec(mod_spec)
+    mod_spec.loader.exec_module(bench)
+    spec = _right_turn(math.inf, 3.0)
+    fit = fit_ramp(spec, seed=2)
+    for r in (29.0, 117.0, 237.0, 238.0, 1066.0):
+        row = {"target_radius_m": math.inf, "xodr_radius_m": r, "target_slope_pct": 3.0,
+               "xodr_slope_pct": 3.0}
+        ok = replace(fit, min_radius_m=r, point_radius_m=r).radius_ok
+        assert ok == bench.agrees(row, FitSettings().inf_reference_m)[0] == (r >= 237.5)
 
 
 def test_inf_radius_candidates_below_the_floor_are_penalised_and_not_acceptable():

@@ -580,11 +580,19 @@ def test_a_ramp_still_crossing_after_resampling_is_resampled_at_the_steepest_slo
     turn lB2 still meets something at its level after Algorithm 1's resampling; the
     clearing draws (steepest slope of the domain) build it without a conflict. (Pinned to
     the fits before the fork's room, :mod:`flyover.geometry.fork`, which change this
-    seed's paths: lB2 then meets nothing after resampling, it misses its radius.)"""
+    seed's paths: lB2 then meets nothing after resampling, it misses its radius; and to
+    rB1's inf target held to 0.95 x 30 m, as before GEOMETRY_VERSION 38: at 0.95 x 250 m
+    rB1 takes another path and lB2 meets nothing.)"""
+    from dataclasses import replace as _replace  # noqa: PLC0415
+
+    from flyover.geometry.specs import RampSpecs  # noqa: PLC0415
     from flyover.geometry.state import LayoutState  # noqa: PLC0415
     from flyover.geometry.tables import DomainResampler  # noqa: PLC0415
 
     monkeypatch.setattr(LayoutState, "fork_room", lambda self, spec: ())
+    spec_of = RampSpecs.spec
+    monkeypatch.setattr(RampSpecs, "spec", lambda self, *a, **k: _replace(
+        spec_of(self, *a, **k), inf_floor_m=30.0))  # no length bound here: only the floor
 
     t = catalog_topologies()["stack4"]
     lanes = {"A1": 3, "A2": 5, "B1": 3, "B2": 3}

@@ -19,7 +19,7 @@ it: stubs get none.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
@@ -33,7 +33,7 @@ from flyover.topology.model import Label
 if TYPE_CHECKING:
     from flyover.geometry.fitted import FittedRamps
 
-__all__ = ["child_room_fences"]
+__all__ = ["RUN_SLACK_M", "beside_run", "child_room_fences", "merge_window"]
 
 
 @dataclass(frozen=True)
@@ -81,11 +81,71 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
         side = _Side(road, road.lanes * st.lane_width_m + 0.5, rail, leaving, tuple(kids))
         strip = max(width[k] for k in kids) + 1.0  # the fit widens it by the ramp's half width
         along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
-        out.append((road.origin[0], road.origin[1], math.cos(road.heading),
-                    math.sin(road.heading), *along, -side.edge - strip, -side.edge))
+        run = None if fitted is None or leaving else beside_run(moves, width, st, spec, fitted)
+        if run is not None:  # off the edge until the child has joined it (a taper)
+            along = (-1e4, run[0] + st.gap_m)
+        frame = (road.origin[0], road.origin[1], math.cos(road.heading), math.sin(road.heading))
+        out.append((*frame, *along, -side.edge - strip, -side.edge))
+        if run is not None:  # and no farther off than its own width and a lane
+            out.append((*frame, *run, -1e4, -side.edge - strip - spec.width_m - RUN_SLACK_M))
         if fitted is not None:
             out += _free_end_room(moves, width, fitted, side)
     return out
+
+
+#: the room (m) a ramp running beside its road for a child (:func:`beside_run`) has
+#: across, beyond its own width: it runs within a lane's width of straight
+RUN_SLACK_M = 4.0
+
+
+def _straight_kids(moves: Movements, fitted: FittedRamps, ramp: str) -> list[str]:
+    """The children joining ``ramp`` on its left that come from a fitted stub's free end
+    (Columbus's ``r12`` from ``r13`` into ``r11``): they run straight on."""
+    out = []
+    for k, _, d in moves.g.in_edges(ramp, data=True):
+        far = ends(moves.topo, k)[0]
+        if d["label"] is not Label.IN_L or far is None or far[0] not in fitted.stations \
+                or not moves.is_stub(far[0]) or ends(moves.topo, far[0])[1] is not None:
+            continue
+        out.append(k)
+    return out
+
+
+def beside_run(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
+               spec: RampSpec, fitted: FittedRamps) -> tuple[float, float] | None:
+    """Where (stations along its road) a ramp joining its road on the right runs beside
+    it, its child's lane and 1 m off its edge, before it merges, so that a child joining
+    it on the left straight on from a fitted stub's free end joins it there straight
+    (Columbus's ``r11``, which merges into I-270 North, and ``r12`` from the collector road
+    ``r13``'s end: real, ``r11`` runs 750 m beside I-270 North, ``r12`` joins it 200 m
+    in). It begins its radius target beyond its window's start (the window leaves room
+    to come in at 45°: :meth:`flyover.geometry.loop_room.LoopRoom.round_loop`; ``r11``
+    fitted into a run beginning ``r sin 45°`` beyond it was still turning there) and runs
+    ``2 × gap_m`` (the child's taper and the ramp's own); ``None`` for any other ramp."""
+    ends_ = ends(moves.topo, spec.id)
+    if spec.end is None or ends_[1] is None or ends_[1][1] is not Label.IN_R \
+            or ends_[1][0] not in moves.roads or not _straight_kids(moves, fitted, spec.id):
+        return None
+    r = spec.target_radius_m if math.isfinite(spec.target_radius_m) else st.fit.inf_reference_m
+    lo = spec.end.lo + r
+    return lo, lo + 2.0 * st.gap_m
+
+
+def merge_window(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
+                 spec: RampSpec, fitted: FittedRamps) -> RampSpec:
+    """``spec`` with its end window reaching far enough beyond its run beside its road
+    (:func:`beside_run`) to merge after it: a reverse curve across the child's lane, 1 m
+    and :data:`RUN_SLACK_M` at its radius target, and two tapers (``gap_m``); unchanged
+    for any other ramp."""
+    run = beside_run(moves, width, st, spec, fitted)
+    if run is None:
+        return spec
+    road = moves.roads[ends(moves.topo, spec.id)[1][0]]
+    r = spec.target_radius_m if math.isfinite(spec.target_radius_m) else st.fit.inf_reference_m
+    shift = max(width[k] for k in _straight_kids(moves, fitted, spec.id)) + 1.0
+    hi = run[1] + 2.0 * math.sqrt(r * (shift + RUN_SLACK_M)) + 2.0 * st.gap_m
+    hi = min(max(spec.end.hi, hi), road.t_hi - st.gap_m)
+    return replace(spec, end=replace(spec.end, hi=float(hi)))
 
 
 def _free_end_room(moves: Movements, width: Mapping[str, float], fitted: FittedRamps,

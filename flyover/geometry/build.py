@@ -58,7 +58,7 @@ from dataclasses import dataclass, replace
 from typing import Callable, Mapping
 
 from flyover.geometry.assemble import assemble
-from flyover.geometry.beside import child_room_fences
+from flyover.geometry.beside import child_room_fences, merge_window
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
@@ -306,9 +306,10 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
     fit = built if built is not None and built.ok else None
     if fit is None and (loops := b.windows.loops.round_loops(ramp)):
         fit = _round_fit(b, ramp, spec, loops, rseed, spent)
+    wide = spec if fit is not None else merge_window(b.moves, b.width, b.st, spec, b.fitted)
     fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
         terminal_fences(b.moves, b.features, b.st, ramp)) + tuple(
-        child_room_fences(b.moves, b.width, b.st, spec, b.fitted))
+        child_room_fences(b.moves, b.width, b.st, wide, b.fitted))
     room = () if fit is not None else b.fork_room(spec)
     if fit is None and (fences or room):
         # a loop whose outer connector leaves a fitted stub keeps off where that one
@@ -318,7 +319,7 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
         # the first of a stub's children out of its fork (into its join) off the way its
         # sibling needs (:meth:`LayoutState.fork_room`); if it cannot meet its targets
         # so, it is fitted as any other ramp
-        fit = spent(_kept_within(b, spec, rseed, fences=fences, approaches=room))
+        fit = spent(_kept_within(b, wide, rseed, fences=fences, approaches=room))
     if fit is None and (ahead := b.approaches(ramp)):
         # a direct left turn keeps off where those fitted after it climb from their
         # fixed ends (:mod:`flyover.geometry.approaches`), at its planned level (lifted,
@@ -350,11 +351,13 @@ def _round_fit(b: LayoutState, ramp: str, spec: RampSpec, loops: frozenset[str],
     (Columbus's r11 with r12) off that road's edge before its window
     (:func:`child_room_fences`); if it cannot go round within the child's room, it goes
     round without it: a bridge over the loop is worse than a tight child."""
-    more = replace(spec, pieces=spec.pieces + 1)
     own = tuple(b.windows.loops.connector_fences(ramp))
-    edges = [own + tuple(child_room_fences(b.moves, b.width, b.st, spec, b.fitted))]
-    edges += [own] if edges[0] != own else []
-    for edge in edges:
+    # with the child's room, its end window reaches beyond where it runs beside its road
+    wide = merge_window(b.moves, b.width, b.st, spec, b.fitted)
+    edges = [(wide, own + tuple(child_room_fences(b.moves, b.width, b.st, wide, b.fitted)))]
+    edges += [(spec, own)] if edges[0][1] != own else []
+    for sp, edge in edges:
+        more = replace(sp, pieces=sp.pieces + 1)
         for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
             kept = spent.fit(fit_ramp(again, b.obstacles(loops, edge), b.st.fit, seed=rseed + n))
             if kept.ok and kept.conflicts == 0:
@@ -465,7 +468,7 @@ def _reason(fit: RampFit, met: Mapping[str, int] | None = None) -> str:
             parts.append(f"slope: {fit.max_slope_pct:.2f} % instead of {sp.target_slope_pct:g} %")
     if not fit.radius_ok and math.isinf(sp.target_radius_m):
         parts.append(f"radius: {min(fit.min_radius_m, fit.point_radius_m):.1f} m, tighter "
-                     f"than the {sp.inf_floor_m:g} m an inf target allows")
+                     f"than 0.95 × the {sp.inf_floor_m:g} m an inf target is built with")
     elif not fit.radius_ok and abs(fit.min_radius_m - sp.target_radius_m) \
             <= 0.05 * sp.target_radius_m:
         parts.append(f"radius: {fit.point_radius_m:.1f} m at a point, tighter than 95 % of "

@@ -118,6 +118,7 @@ from flyover.geometry.profile import climb_distance
 from flyover.geometry.roads import layout_roads
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
+from flyover.geometry.straight import SHIFT_M, TURNING_RAD
 from flyover.sampling.model import (
     ElementCondition, Feature, FeatureModel, ForbidRule, Profile, Relation, default_profile,
     feature_model,
@@ -132,11 +133,6 @@ __all__ = ["LEVEL_SLOPE_PCT", "TURNING_RAD", "level_ramps", "straight_connectors
 #: the slope target of a level ramp (percent)
 LEVEL_SLOPE_PCT = 0.0
 
-#: a ramp whose chain connects roads at least this far apart in heading (rad) must turn
-TURNING_RAD = 0.5
-
-#: a ramp whose windows lie this far apart sideways (m) or more must shift: not straight
-SHIFT_M = 0.5
 
 
 def _movements(topology: Topology, settings: LayoutSettings | None = None) -> Movements:

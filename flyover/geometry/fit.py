@@ -41,10 +41,10 @@ for a metre or two, and the exported road shows it as a heading step at a link).
 A target of ``inf`` on a ramp that has to turn means
 *no radius to match*: the ramp is fitted as the gentlest curve its ends allow
 (curvature² is minimised instead of matching a radius), and its radius counts
-as within tolerance when it is no tighter than :attr:`RampSpec.inf_floor_m`
-(the tightest radius of the feature domain, 30 m in the paper's profile; 5 %
-tolerance like a finite target) — a gentlest curve with a kink in it is no
-straight ramp.
+as within tolerance when it is nowhere tighter than :attr:`RampSpec.inf_floor_m`
+(``inf_reference_m``, 250 m, the radius it is built with; 5 % tolerance like a finite
+target: :func:`flyover.geometry.straight.inf_met`, the benchmark's reading of the
+exported ``.xodr`` too) — a gentlest curve with a kink in it is no straight ramp.
 """
 
 from __future__ import annotations
@@ -61,6 +61,7 @@ from flyover.geometry.bezier import (heading_vec, held_radius, lane_centre, lane
                                      sample_spline)
 from flyover.geometry.profile import climb_distance, elevation_polys, max_grade
 from flyover.geometry.model import BezierPiece, ElevationPoly
+from flyover.geometry.straight import INF_REFERENCE_M, inf_met, radius_met
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
            "ramp_objective", "conflicts_with", "recount"]
@@ -182,8 +183,9 @@ class RampSpec:
     #: longest straight lead (m) at the start / end, where the ramp runs along its
     #: parent's heading before it turns (e.g. climbing beside it); ``None``: no lead
     lead_m: tuple[float | None, float | None] = (None, None)
-    #: an ``inf`` radius target: the lane-centre radius is never below this (m)
-    inf_floor_m: float = 30.0
+    #: an ``inf`` radius target: the lane-centre radius is never below 0.95 × this (m;
+    #: :func:`flyover.geometry.straight.inf_met`): the radius an ``inf`` ramp is built with
+    inf_floor_m: float = INF_REFERENCE_M
     #: the least (m) its plan needs: the shortest path between its windows at 0.95 × its
     #: radius, its turn at that radius (:meth:`flyover.geometry.specs.RampSpecs.least_m`)
     least_m: float = 0.0
@@ -224,7 +226,7 @@ class FitSettings:
     transition_m: float = 40.0
     end_zone_m: float = 15.0
     margin_m: float = 0.5
-    inf_reference_m: float = 250.0
+    inf_reference_m: float = INF_REFERENCE_M
     compact_m: float = 500.0
     compact_weight: float = 0.02
     patience: int = 30
@@ -260,13 +262,14 @@ class RampFit:
 
     @property
     def radius_ok(self) -> bool:
-        """The held radius within 5 % of the target (``inf``: no tighter than 0.95 × the
-        floor), and the lane centre nowhere (pointwise) tighter than 0.95 × the target
-        (``inf``: the floor)."""
+        """The held radius within 5 % of the target, and the lane centre nowhere
+        (pointwise) tighter than 0.95 × the target; ``inf``: neither tighter than 0.95 ×
+        :attr:`RampSpec.inf_floor_m` (:func:`flyover.geometry.straight.inf_met`, as the
+        benchmark reads the exported ``.xodr``)."""
         t = self.spec.target_radius_m
         if math.isinf(t):
-            return min(self.min_radius_m, self.point_radius_m) >= 0.95 * self.spec.inf_floor_m
-        return abs(self.min_radius_m - t) <= 0.05 * t and self.point_radius_m >= 0.95 * t
+            return inf_met(min(self.min_radius_m, self.point_radius_m), self.spec.inf_floor_m)
+        return radius_met(self.min_radius_m, t) and inf_met(self.point_radius_m, t)
 
     @property
     def slope_ok(self) -> bool:

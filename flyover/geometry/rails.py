@@ -68,13 +68,17 @@ from flyover.geometry.loop_room import LoopRoom
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
-__all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M", "beyond_continuation",
+__all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M", "STRAIGHT_ON_RAD",
+           "beyond_continuation",
            "clear_of_others", "level_part", "room_beside"]
 
 #: the largest grade of a parent ramp (a fraction) at which a child may attach to it
 LEVEL_GRADE = 0.003
 #: the shortest level part of a parent's window that a child is held to (m)
 LEVEL_RUN_M = 5.0
+#: a child straight on from a stub's free end joins its parent where the parent heads
+#: within this much (rad) of that end (:meth:`AttachmentWindows.straight_on`)
+STRAIGHT_ON_RAD = 0.15
 #: a child may attach where its parent is this much (a fraction) steeper than the
 #: child's slope target: within the target's tolerance (0.2 pp)
 GENTLE_MARGIN = 0.001
@@ -262,9 +266,38 @@ class AttachmentWindows:
                 if part is not None:
                     lo, hi = part
                     break
+            if not is_start:
+                lo, hi = self.straight_on(parent, ramp, label, lo, hi)
         if hi - lo < 1e-3:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
+
+
+    def straight_on(self, parent: str, ramp: str, label: Label, lo: float, hi: float
+                    ) -> tuple[float, float]:
+        """A child joining ``parent`` on its left straight on from a fitted stub's free end
+        (Columbus's ``r12`` from ``r13`` into ``r11``: radius ``inf``) joins it where it
+        heads within :data:`STRAIGHT_ON_RAD` of that end (where ``parent`` runs beside its
+        road for it: :func:`flyover.geometry.beside.beside_run`): the part of ``lo..hi``
+        (where it has room and is level) in such a run of stations, else the longest such
+        run; ``lo..hi`` unchanged for any other child or when there is none."""
+        far = ends(self.topo, ramp)[0]
+        if label is not Label.IN_L or far is None or far[0] not in self.fitted.stations \
+                or not self.moves.is_stub(far[0]) or ends(self.topo, far[0])[1] is not None:
+            return lo, hi
+        st = self.fitted.stations[parent]
+        h0 = float(self.fitted.stations[far[0]]["heading"][-1])
+        s = st["s"]
+        near = np.abs((st["heading"] - h0 + np.pi) % (2 * np.pi) - np.pi) <= STRAIGHT_ON_RAD
+        near &= (s >= 0.05 * s[-1]) & (s <= 0.95 * s[-1])
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], near.astype(int), [0]])))
+        runs = [(float(s[a]), float(s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
+        runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
+        if not runs:
+            return lo, hi
+        cut = [(max(lo, a), min(hi, b)) for a, b in runs]
+        cut = [r for r in cut if r[1] - r[0] >= LEVEL_RUN_M]
+        return max(cut or runs, key=lambda r: r[1] - r[0])
 
 
 def beyond_continuation(moves: Movements, st: LayoutSettings, road: str, ramp: str,

@@ -48,7 +48,6 @@ class LayoutSettings:
     restarts: int = 5
     #: whole-interchange rebuilds with other DE seeds while a ramp still meets something
     rebuilds: int = 3
-    inf_min_radius_m: float = 30.0
     #: a ramp attaches to a road no farther beyond the room it keeps from the crossing
     #: than (1 + length_margin) × what it needs (:meth:`RampSpecs.need_m`: its turn at its
     #: radius or its climb at its slope, and its two tapers); ``None``: anywhere within

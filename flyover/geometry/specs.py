@@ -114,7 +114,7 @@ class RampSpecs:
         bounded = st.max_length_ratio is not None and not cd
         return RampSpec(ramp, a, b, free, float(turn), pieces, width, float(feat.radius_m),
                         float(feat.slope_pct), crest, self._leads(start, end, crest, free, feat),
-                        inf_floor_m=float(st.inf_min_radius_m),
+                        inf_floor_m=float(st.fit.inf_reference_m),
                         least_m=0.0 if cd else self.least_m(a, b, free, turn, feat),
                         length_ratio=float(st.max_length_ratio) if bounded else np.inf,
                         tapers_m=2.0 * st.gap_m)
@@ -122,12 +122,12 @@ class RampSpecs:
     def least_m(self, a: Rail | None, b: Rail | None, free, turn: float, feat: RampFeatures,
                 n: int = 24) -> float:
         """The least a ramp's plan needs (m): the longer of the shortest path of curvature at
-        most 1 / (0.95 × its radius target) (``inf``: ``inf_min_radius_m``) from a point of
+        most 1 / (0.95 × its radius target) (``inf``: ``inf_reference_m``) from a point of
         its start window heading along its parent to one of its end window
         (:func:`flyover.geometry.dubins.shortest`, each window sampled at ``n`` stations)
         and its turn at that radius; a stub: the farthest out its free end may lie (where
         :class:`flyover.geometry.free_end.FreeEnds` puts it for its children)."""
-        r = 0.95 * feat.radius_m if np.isfinite(feat.radius_m) else self.st.inf_min_radius_m
+        r = 0.95 * (feat.radius_m if np.isfinite(feat.radius_m) else self.st.fit.inf_reference_m)
         arc = abs(turn) * r
         if free is not None:
             return max(arc, float(np.hypot(free.forward[1], max(map(abs, free.lateral)))))

@@ -231,7 +231,13 @@ def class_tables(stage):
 #     and a stub with a collector road among its children keeps no connector room (Columbus's
 #     r8: with half r2's climb its end lay 644 m out, r13's loop r6 beside I-70 and r1
 #     4 m off I-70 West; free_end.FreeEnds.connector_room); the catalog has no such stub
-#     (geometry_bytes unchanged)
+#     (geometry_bytes unchanged);
+#     one reading of an inf radius target (flyover.geometry.straight):
+#     the fit, like the benchmark, holds it to 0.95 x inf_reference_m (250 m), not 0.95 x
+#     30 m (geometry.inf_min_radius_m, removed); a ramp joining its road whose child comes
+#     straight on from a fitted stub's free end runs beside the road a lane off its edge
+#     before it merges, and the child joins it there (beside.beside_run, rails.straight_on:
+#     Columbus's r11 and r12)
 GEOMETRY_VERSION = 38
 
 
