@@ -272,7 +272,6 @@ class AttachmentWindows:
             hi = lo + 1e-3
         return Rail(parent, label.value, st["s"], st["xy"], st["heading"], st["z"], off, lo, hi)
 
-
     def straight_on(self, parent: str, ramp: str, label: Label, lo: float, hi: float
                     ) -> tuple[float, float]:
         """A child joining ``parent`` on its left straight on from a fitted stub's free end
