@@ -66,6 +66,43 @@ def test_a_collector_road_splitting_into_a_loop_ends_past_the_road_the_loop_goes
     assert min(xs) >= edge + 0.5 * b.width["r13"]
 
 
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_a_collector_road_leaving_a_stub_near_the_road_slides_clear_of_it():
+    """Columbus drawn set 15: r8 ended 4.7 m right of I-270 North's band (lanes 3), inside
+    the margin the collector road r13 keeps (half its 8 m and 1 m: 5 m), heading 0.0965 rad
+    toward the road. Its free end kept its 3-40 m to the left of r8's end, as for a stub
+    that does not run beside the road, so every free end its ranges allowed lay across
+    I-270 (both carriageways): r13 missed its targets with 5 same-level conflict samples
+    (and r2, r5 and r12 after it). A stub ending right of the band, within the margin,
+    slides away like one ending beyond it."""
+    from flyover.geometry.chains import ends  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    st = LayoutSettings()
+    feats = {r: RampFeatures(150.0, 2.0) for r in topo.ramps}
+    feats["r13"] = RampFeatures(150.0, 0.0)  # level (fixed_features)
+    b = LayoutState(topo, {"I270N": 3}, feats, st, 0)
+    fit, _, _ = _fit_with_levels(b, b.spec("r8", feats["r8"]), 1)
+    b.record("r8", fit)
+    fe = b.specs.free_ends
+    q = b.roads["I270N"]
+    n = np.array([-np.sin(q.heading), np.cos(q.heading)])  # left of I-270 North
+    u = np.array([np.cos(q.heading), np.sin(q.heading)])
+    band = -q.lanes * st.lane_width_m
+    edge = band - 0.5 * b.width["r13"] - 1.0
+    h = q.heading + 0.0965
+    start, _ = ends(topo, "r13")
+    for lat_p in (edge + 0.29, edge - 0.29):  # set 15's r8 end, and just beyond the margin
+        p = np.array(q.origin) + lat_p * n - 275.0 * u
+        b.fitted.start_pose = lambda ramp, s, p=p: (p, h)
+        free, _ = fe.free_end("r13", start, None, feats["r13"], b.width["r13"])
+        for d in free.forward:
+            for e in free.lateral:
+                xy = p + d * np.array([np.cos(h), np.sin(h)]) \
+                    + e * np.array([-np.sin(h), np.cos(h)])
+                assert float((xy - np.array(q.origin)) @ n) <= edge + 1e-6
+
 def _collector_loop():
     """A 4-leg with Columbus's collector road: e leaves A1 before the crossing and splits
     into x (right turn to B1) and c, which goes on beside A1, under B, and splits into the

@@ -215,7 +215,11 @@ class FreeEnds:
         parent's fit), so ``3..40`` m to the left of a stub leaving its parent on the left
         can lie across that road (Columbus's ``r13``, leaving ``r8`` toward I-270 North): it
         slides away from the road, at its width, until the free end is clear of the road's
-        band by half the stub's width and 1 m anywhere in the forward range."""
+        band by half the stub's width and 1 m anywhere in the forward range. A parent ending
+        right of the band but within that margin slides so too (Columbus drawn set 15:
+        ``r8`` ended 4.7 m right of I-270 North's band, 0.3 m inside the 5 m margin, heading
+        0.1 rad toward it; ``r13``'s free end kept 3..40 m to its left, across I-270, and
+        ``r13`` met both carriageways); one ending on or left of the band keeps its range."""
         lat = tuple(free.lateral)
         src = road_of(self.topo, ramp, False)
         if not src or src not in self.roads:
@@ -225,8 +229,9 @@ class FreeEnds:
         delta = h - q.heading
         n = np.array([-np.sin(q.heading), np.cos(q.heading)])
         lat_p = float((p - np.array(q.origin)) @ n)
-        edge = -q.lanes * self.st.lane_width_m - 0.5 * width - 1.0  # right of its band
-        if np.cos(delta) < 0.5 or lat_p > edge:
+        band = -q.lanes * self.st.lane_width_m  # the right edge of its band
+        edge = band - 0.5 * width - 1.0  # clear of it by half the stub's width and 1 m
+        if np.cos(delta) < 0.5 or lat_p > band:  # not along it, or not on its right
             return lat
         worst = max(d * np.sin(delta) for d in free.forward)
         e_max = (edge - lat_p - worst) / np.cos(delta)

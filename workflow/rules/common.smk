@@ -238,7 +238,11 @@ def class_tables(stage):
 #     straight on from a fitted stub's free end runs beside the road a lane off its edge
 #     before it merges, and the child joins it there (beside.beside_run, rails.straight_on:
 #     Columbus's r11 and r12)
-GEOMETRY_VERSION = 38
+# 39: a split stub's free end slides clear of the road its chain runs beside also when
+#     its parent ends right of that road's band but within the stub's margin (half its
+#     width and 1 m): Columbus drawn set 15's r13 lay across I-270 (free_end.FreeEnds.
+#     beside_road); the catalog has no stub splitting off a stub (geometry_bytes unchanged)
+GEOMETRY_VERSION = 39
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
