@@ -135,8 +135,11 @@ def merge_window(moves: Movements, width: Mapping[str, float], st: LayoutSetting
                  spec: RampSpec, fitted: FittedRamps) -> RampSpec:
     """``spec`` with its end window reaching far enough beyond its run beside its road
     (:func:`beside_run`) to merge after it: a reverse curve across the child's lane, 1 m
-    and :data:`RUN_SLACK_M` at its radius target, and two tapers (``gap_m``); unchanged
-    for any other ramp."""
+    and :data:`RUN_SLACK_M` at its radius target, and two tapers (``gap_m``), and coming
+    down (up) to its road's height first (:attr:`flyover.geometry.fit.RampSpec.end_z_first`):
+    the child joins it in that run from a stub's free end at about that height (Columbus's
+    ``r12`` from ``r13``'s end at 0.5 m; ``r11`` kept ``r1``'s 7 m until just before its
+    end); unchanged for any other ramp."""
     run = beside_run(moves, width, st, spec, fitted)
     if run is None:
         return spec
@@ -145,7 +148,7 @@ def merge_window(moves: Movements, width: Mapping[str, float], st: LayoutSetting
     shift = max(width[k] for k in _straight_kids(moves, fitted, spec.id)) + 1.0
     hi = run[1] + 2.0 * math.sqrt(r * (shift + RUN_SLACK_M)) + 2.0 * st.gap_m
     hi = min(max(spec.end.hi, hi), road.t_hi - st.gap_m)
-    return replace(spec, end=replace(spec.end, hi=float(hi)))
+    return replace(spec, end=replace(spec.end, hi=float(hi)), end_z_first=True)
 
 
 def _free_end_room(moves: Movements, width: Mapping[str, float], fitted: FittedRamps,

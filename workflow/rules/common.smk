@@ -238,7 +238,9 @@ def class_tables(stage):
 #     straight on from a fitted stub's free end runs beside the road a lane off its edge
 #     before it merges, and the child joins it there (beside.beside_run, rails.straight_on:
 #     Columbus's r11 and r12)
-GEOMETRY_VERSION = 38
+# 39: such a ramp reaches its road's height first (RampSpec.end_z_first) and the child joins
+#     it within that run (rails.AttachmentWindows.beside_part): Columbus's r11 and r12
+GEOMETRY_VERSION = 39
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
