@@ -61,7 +61,7 @@ from typing import Mapping
 
 import numpy as np
 
-from flyover.geometry.beside import beside_run
+from flyover.geometry.beside import beside_run, joins_straight_on
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Rail
 from flyover.geometry.fitted import FittedRamps
@@ -285,10 +285,9 @@ class AttachmentWindows:
         off I-270 North on drawn set 2, ``r13`` ending 5° off the other way), so ``r12``
         joined past it, where ``r11`` merges along the road's edge with no room on its
         left."""
-        far = ends(self.topo, ramp)[0]
-        if label is not Label.IN_L or far is None or far[0] not in self.fitted.stations \
-                or not self.moves.is_stub(far[0]) or ends(self.topo, far[0])[1] is not None:
+        if not joins_straight_on(self.moves, self.fitted, ramp, label):
             return lo, hi
+        far = ends(self.topo, ramp)[0]
         st = self.fitted.stations[parent]
         run = self.beside_part(parent)
         if run is not None:  # where the parent runs beside its road for it
