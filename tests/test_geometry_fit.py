@@ -542,3 +542,29 @@ def test_evolve_with_bounded_trials_takes_the_same_path():
     a = evolve(sphere, [(-1.0, 1.0)] * 4, 4, 80, seed=5)
     b = evolve(bounded, [(-1.0, 1.0)] * 4, 4, 80, seed=5)
     assert np.array_equal(a.x, b.x) and a.fun == b.fun and a.evaluations == b.evaluations
+
+
+def test_a_ramp_with_end_z_first_reaches_its_end_height_early_and_runs_on_at_it():
+    """A ramp a child joins beside its road at that road's height (Columbus's r11, from r1
+    at 7 m down to I-270 North, r12 joining it from the collector road's end at 0.5 m)
+    descends first (``RampSpec.end_z_first``); without it the profile keeps its start's
+    height as long as it can and descends just before its end, where the child found it
+    7 m up (drawn set 9: r12 at 1 % came out 1.9 %)."""
+    from flyover.geometry.profile import climb_distance  # noqa: PLC0415
+
+    a = Rail.line("A1", "Out-R", (0, 0), 0.0, 6.5, -15.0, -800, -40)
+    b = Rail.line("B1", "In-R", (0, 0), -np.pi / 2, 0.0, -15.0, 40, 800)
+    spec = RampSpec("r", a, b, None, -np.pi / 2, 1, W, 100.0, 4.0)
+    late, early = (fit_ramp(replace(spec, end_z_first=f), seed=1) for f in (False, True))
+    down = float(climb_distance(6.5, 0.04, FitSettings().transition_m))
+    for fit in (late, early):
+        assert fit.ok and fit.length_m > down + 20.0
+        assert abs(fit.max_slope_pct - 4.0) <= 0.2
+        _check_ends(fit)
+
+    def z(fit, s):
+        return float(evaluate_polys(fit.elevation, np.array([s]))[0][0])
+
+    assert z(early, down + 1.0) == pytest.approx(0.0, abs=1e-6)
+    assert z(late, late.length_m - down - 1.0) == pytest.approx(6.5, abs=1e-6)
+    assert z(late, down + 1.0) > 1.0

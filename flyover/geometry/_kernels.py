@@ -708,10 +708,10 @@ def _energy1(t, p, conflict_weight, depth_weight, compact_weight):  # pragma: no
 
 @njit(cache=True, nogil=True)
 def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode, free_z, leads,
-                    z_crest, m, width, grade, transition, r_target, inf_ref, inf_floor, compact_m,
-                    spread_a, spread_b, end_zone, hw, clearance, lines, px, py, pz, phw, starts,
-                    x0, y0, cell, reach, nx, ny, zlo, zhi, weights, bound, gap, least_plan,
-                    length_ratio, tapers):  # pragma: no cover - compiled
+                    z_crest, end_first, m, width, grade, transition, r_target, inf_ref,
+                    inf_floor, compact_m, spread_a, spread_b, end_zone, hw, clearance, lines,
+                    px, py, pz, phw, starts, x0, y0, cell, reach, nx, ny, zlo, zhi, weights,
+                    bound, gap, least_plan, length_ratio, tapers):  # pragma: no cover - compiled
     """The ramp objective's terms (rows :data:`TERMS`, ``(11, P)``) of decision vectors ``x``.
 
     :func:`decode` then :func:`spline_terms`, then per candidate: radius error
@@ -728,7 +728,8 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     ``over``: how far (relative) the candidate is longer than its length bound
     (:func:`length_bound` of ``least_plan`` and its climb to its crest and down, less
     :data:`LENGTH_MARGIN`; ``length_ratio`` ``inf``: none). The crest is
-    the higher end or ``z_crest`` (``-inf``: none).
+    the higher end or ``z_crest`` (``-inf``: none); with ``end_first`` 1 the end's height
+    (it reaches it as early as it can: :attr:`flyover.geometry.fit.RampSpec.end_z_first`).
 
     ``bound`` ``(P,)``: a candidate whose energy (:func:`energy` with ``weights``)
     without its conflicts already exceeds its bound is not searched for conflicts
@@ -743,7 +744,7 @@ def objective_terms(x, pieces, turn_rad, a_rail, a_off, b_rail, b_off, free_mode
     p_count = x.shape[1]
     za = poses[0, 3].copy()
     zb = poses[1, 3].copy()
-    zc = np.maximum(np.maximum(za, zb), z_crest)
+    zc = zb.copy() if end_first > 0 else np.maximum(np.maximum(za, zb), z_crest)
     g = grade if grade > 0 else 1.0
     t, xs, ys, tx, ty, sp, kap, ss, cx, cy, zz, ln = _scratch(m, ctrl.shape[1] * m)
     out = np.empty((11, p_count))

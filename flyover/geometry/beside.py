@@ -28,12 +28,14 @@ from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Rail, RampSpec
 from flyover.geometry.roads import RoadLine
 from flyover.geometry.settings import LayoutSettings
+from flyover.geometry.straight import built_radius
 from flyover.topology.model import Label
 
 if TYPE_CHECKING:
     from flyover.geometry.fitted import FittedRamps
 
-__all__ = ["RUN_SLACK_M", "beside_run", "child_room_fences", "merge_window"]
+__all__ = ["RUN_SLACK_M", "beside_run", "child_room_fences", "joins_straight_on",
+           "merge_window"]
 
 
 @dataclass(frozen=True)
@@ -48,8 +50,8 @@ class _Side:
 
 
 def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
-                      spec: RampSpec, fitted: FittedRamps | None = None
-                      ) -> list[tuple[float, ...]]:
+                      spec: RampSpec, fitted: FittedRamps | None = None,
+                      run: tuple[float, float] | None = None) -> list[tuple[float, ...]]:
     """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping the
     ramp of ``spec`` off the strip along its road's right edge, as wide as itself and its
     widest child attached on its left and 1 m, beyond its start window (leaving the road
@@ -61,7 +63,9 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
     road ``r13``'s end, beside I-270 North, into ``r11``) starts (ends) there, away from
     the edge: the strip then reaches out to that end (its lane and 1 m beyond it), from
     its station to the window (``r11``, fitted round the loop ``r6``, passed just beyond
-    ``r13``'s end and left ``r12`` no way north but a tight turn into it)."""
+    ``r13``'s end and left ``r12`` no way north but a tight turn into it). ``run``: the
+    ramp's run beside its road for such a child (:func:`beside_run`, as
+    :func:`merge_window` took it; with ``fitted`` only)."""
     ramp, g = spec.id, moves.g
     if moves.is_stub(ramp):
         return []
@@ -81,13 +85,14 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
         side = _Side(road, road.lanes * st.lane_width_m + 0.5, rail, leaving, tuple(kids))
         strip = max(width[k] for k in kids) + 1.0  # the fit widens it by the ramp's half width
         along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
-        run = None if fitted is None or leaving else beside_run(moves, width, st, spec, fitted)
-        if run is not None:  # off the edge until the child has joined it (a taper)
-            along = (-1e4, run[0] + st.gap_m)
+        beside = None if fitted is None or leaving else run
+        if beside is not None:  # off the edge until the child has joined it (a taper)
+            along = (-1e4, beside[0] + st.gap_m)
         frame = (road.origin[0], road.origin[1], math.cos(road.heading), math.sin(road.heading))
         out.append((*frame, *along, -side.edge - strip, -side.edge))
-        if run is not None:  # and no farther off than its own width and a lane
-            out.append((*frame, *run, -1e4, -side.edge - strip - spec.width_m - RUN_SLACK_M))
+        if beside is not None:  # and no farther off than its own width and a lane
+            out.append((*frame, *beside, -1e4,
+                        -side.edge - strip - spec.width_m - RUN_SLACK_M))
         if fitted is not None:
             out += _free_end_room(moves, width, fitted, side)
     return out
@@ -98,17 +103,19 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
 RUN_SLACK_M = 4.0
 
 
+def joins_straight_on(moves: Movements, fitted: FittedRamps, kid: str, label: Label) -> bool:
+    """Whether ``kid``, attached to its parent by ``label``, joins it on its left straight
+    on from a fitted stub's free end (Columbus's ``r12`` from ``r13`` into ``r11``)."""
+    far = ends(moves.topo, kid)[0]
+    return label is Label.IN_L and far is not None and far[0] in fitted.stations \
+        and moves.is_stub(far[0]) and ends(moves.topo, far[0])[1] is None
+
+
 def _straight_kids(moves: Movements, fitted: FittedRamps, ramp: str) -> list[str]:
     """The children joining ``ramp`` on its left that come from a fitted stub's free end
-    (Columbus's ``r12`` from ``r13`` into ``r11``): they run straight on."""
-    out = []
-    for k, _, d in moves.g.in_edges(ramp, data=True):
-        far = ends(moves.topo, k)[0]
-        if d["label"] is not Label.IN_L or far is None or far[0] not in fitted.stations \
-                or not moves.is_stub(far[0]) or ends(moves.topo, far[0])[1] is not None:
-            continue
-        out.append(k)
-    return out
+    (:func:`joins_straight_on`): they run straight on."""
+    return [k for k, _, d in moves.g.in_edges(ramp, data=True)
+            if joins_straight_on(moves, fitted, k, d["label"])]
 
 
 def beside_run(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
@@ -126,26 +133,28 @@ def beside_run(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
     if spec.end is None or ends_[1] is None or ends_[1][1] is not Label.IN_R \
             or ends_[1][0] not in moves.roads or not _straight_kids(moves, fitted, spec.id):
         return None
-    r = spec.target_radius_m if math.isfinite(spec.target_radius_m) else st.fit.inf_reference_m
-    lo = spec.end.lo + r
+    lo = spec.end.lo + built_radius(spec.target_radius_m, st.fit.inf_reference_m)
     return lo, lo + 2.0 * st.gap_m
 
 
 def merge_window(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
-                 spec: RampSpec, fitted: FittedRamps) -> RampSpec:
+                 spec: RampSpec, fitted: FittedRamps,
+                 run: tuple[float, float] | None) -> RampSpec:
     """``spec`` with its end window reaching far enough beyond its run beside its road
     (:func:`beside_run`) to merge after it: a reverse curve across the child's lane, 1 m
-    and :data:`RUN_SLACK_M` at its radius target, and two tapers (``gap_m``); unchanged
-    for any other ramp."""
-    run = beside_run(moves, width, st, spec, fitted)
+    and :data:`RUN_SLACK_M` at its radius target, and two tapers (``gap_m``), and coming
+    down (up) to its road's height first (:attr:`flyover.geometry.fit.RampSpec.end_z_first`):
+    the child joins it in that run from a stub's free end at about that height (Columbus's
+    ``r12`` from ``r13``'s end at 0.5 m; ``r11`` kept ``r1``'s 7 m until just before its
+    end); unchanged for any other ramp (``run``: :func:`beside_run` of ``spec``)."""
     if run is None:
         return spec
     road = moves.roads[ends(moves.topo, spec.id)[1][0]]
-    r = spec.target_radius_m if math.isfinite(spec.target_radius_m) else st.fit.inf_reference_m
+    r = built_radius(spec.target_radius_m, st.fit.inf_reference_m)
     shift = max(width[k] for k in _straight_kids(moves, fitted, spec.id)) + 1.0
     hi = run[1] + 2.0 * math.sqrt(r * (shift + RUN_SLACK_M)) + 2.0 * st.gap_m
     hi = min(max(spec.end.hi, hi), road.t_hi - st.gap_m)
-    return replace(spec, end=replace(spec.end, hi=float(hi)))
+    return replace(spec, end=replace(spec.end, hi=float(hi)), end_z_first=True)
 
 
 def _free_end_room(moves: Movements, width: Mapping[str, float], fitted: FittedRamps,

@@ -58,7 +58,7 @@ from dataclasses import dataclass, replace
 from typing import Callable, Mapping
 
 from flyover.geometry.assemble import assemble
-from flyover.geometry.beside import child_room_fences, merge_window
+from flyover.geometry.beside import beside_run, child_room_fences, merge_window
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
@@ -306,10 +306,12 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
     fit = built if built is not None and built.ok else None
     if fit is None and (loops := b.windows.loops.round_loops(ramp)):
         fit = _round_fit(b, ramp, spec, loops, rseed, spent)
-    wide = spec if fit is not None else merge_window(b.moves, b.width, b.st, spec, b.fitted)
+    run = None if fit is not None else beside_run(b.moves, b.width, b.st, spec, b.fitted)
+    wide = spec if fit is not None else merge_window(b.moves, b.width, b.st, spec, b.fitted,
+                                                     run)
     fences = () if fit is not None else tuple(b.windows.loops.fences(ramp)) + tuple(
         terminal_fences(b.moves, b.features, b.st, ramp)) + tuple(
-        child_room_fences(b.moves, b.width, b.st, wide, b.fitted))
+        child_room_fences(b.moves, b.width, b.st, wide, b.fitted, run))
     room = () if fit is not None else b.fork_room(spec)
     if fit is None and (fences or room):
         # a loop whose outer connector leaves a fitted stub keeps off where that one
@@ -353,8 +355,10 @@ def _round_fit(b: LayoutState, ramp: str, spec: RampSpec, loops: frozenset[str],
     round without it: a bridge over the loop is worse than a tight child."""
     own = tuple(b.windows.loops.connector_fences(ramp))
     # with the child's room, its end window reaches beyond where it runs beside its road
-    wide = merge_window(b.moves, b.width, b.st, spec, b.fitted)
-    edges = [(wide, own + tuple(child_room_fences(b.moves, b.width, b.st, wide, b.fitted)))]
+    run = beside_run(b.moves, b.width, b.st, spec, b.fitted)
+    wide = merge_window(b.moves, b.width, b.st, spec, b.fitted, run)
+    edges = [(wide, own + tuple(child_room_fences(b.moves, b.width, b.st, wide, b.fitted,
+                                                  run)))]
     edges += [(spec, own)] if edges[0][1] != own else []
     for sp, edge in edges:
         more = replace(sp, pieces=sp.pieces + 1)

@@ -194,6 +194,10 @@ class RampSpec:
     length_ratio: float = math.inf
     #: what the ramp may use on top for its diverge / merge tapers (m)
     tapers_m: float = 0.0
+    #: with no crest (``z_crest`` ``None``): reach the end's height as early as it can and
+    #: run on at it, not the start's as long as it can (a ramp a child joins beside its
+    #: road at that road's height: :func:`flyover.geometry.beside.merge_window`)
+    end_z_first: bool = False
 
     def max_length_m(self, za: float, zc: float, zb: float, transition_m: float) -> float:
         """The longest this ramp may be with ends at heights ``za``, ``zb`` and crest ``zc``:
@@ -352,6 +356,8 @@ def _decode(spec: RampSpec, x: np.ndarray, rails: tuple | None = None) -> _Decod
 
 
 def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
+    if spec.z_crest is None and spec.end_z_first:
+        return np.asarray(zb, float).copy()
     top = np.maximum(za, zb)
     return top if spec.z_crest is None else np.maximum(top, spec.z_crest)
 
@@ -414,7 +420,8 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     g = spec.target_slope_pct / 100.0
     stub = spec.free is not None
     args = (*_rail_args(spec), -np.inf if spec.z_crest is None else float(spec.z_crest),
-            int(settings.samples), float(spec.width_m), float(g), float(settings.transition_m),
+            float(spec.z_crest is None and spec.end_z_first), int(settings.samples),
+            float(spec.width_m), float(g), float(settings.transition_m),
             float(spec.target_radius_m), float(settings.inf_reference_m),
             float(spec.inf_floor_m),
             float(settings.compact_m),

@@ -43,6 +43,7 @@ import numpy as np
 from flyover.geometry.chains import Movements, ends, road_of, wrap
 from flyover.geometry.profile import loop_radius
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
+from flyover.geometry.straight import built_radius
 
 __all__ = ["LevelPlan", "round_diagonal"]
 
@@ -247,7 +248,7 @@ def round_diagonal(moves: Movements, features: Mapping[str, RampFeatures], st: L
     about half its own radius earlier (a 45° turn), after a taper (``gap_m``)."""
 
     def built(r: float) -> float:
-        return r if math.isfinite(r) else st.fit.inf_reference_m
+        return built_radius(r, st.fit.inf_reference_m)
 
     c = moves.round_gap(ramp, loop, st.ramp_lane_width_m)
     zs = zs or [0.0]  # its climb between its roads

@@ -61,6 +61,7 @@ from typing import Mapping
 
 import numpy as np
 
+from flyover.geometry.beside import beside_run, joins_straight_on
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Rail
 from flyover.geometry.fitted import FittedRamps
@@ -275,16 +276,24 @@ class AttachmentWindows:
     def straight_on(self, parent: str, ramp: str, label: Label, lo: float, hi: float
                     ) -> tuple[float, float]:
         """A child joining ``parent`` on its left straight on from a fitted stub's free end
-        (Columbus's ``r12`` from ``r13`` into ``r11``: radius ``inf``) joins it where it
-        heads within :data:`STRAIGHT_ON_RAD` of that end (where ``parent`` runs beside its
-        road for it: :func:`flyover.geometry.beside.beside_run`): the part of ``lo..hi``
-        (where it has room and is level) in such a run of stations, else the longest such
-        run; ``lo..hi`` unchanged for any other child or when there is none."""
-        far = ends(self.topo, ramp)[0]
-        if label is not Label.IN_L or far is None or far[0] not in self.fitted.stations \
-                or not self.moves.is_stub(far[0]) or ends(self.topo, far[0])[1] is not None:
+        (Columbus's ``r12`` from ``r13`` into ``r11``: radius ``inf``) joins it within its
+        run beside its road (:meth:`beside_part`, where ``lo..hi``, where it has room and
+        is level, reaches into it); else where it heads within :data:`STRAIGHT_ON_RAD` of
+        that end: the part of ``lo..hi`` in such a run of stations, else the longest such
+        run; ``lo..hi`` unchanged for any other child or when there is none. Until
+        GEOMETRY_VERSION 39 the heading alone chose: ``r11`` still turns in its run (6-10°
+        off I-270 North on drawn set 2, ``r13`` ending 5° off the other way), so ``r12``
+        joined past it, where ``r11`` merges along the road's edge with no room on its
+        left."""
+        if not joins_straight_on(self.moves, self.fitted, ramp, label):
             return lo, hi
+        far = ends(self.topo, ramp)[0]
         st = self.fitted.stations[parent]
+        run = self.beside_part(parent)
+        if run is not None:  # where the parent runs beside its road for it
+            cut = (max(lo, run[0]), min(hi, run[1]))
+            if cut[1] - cut[0] >= LEVEL_RUN_M:
+                return cut
         h0 = float(self.fitted.stations[far[0]]["heading"][-1])
         s = st["s"]
         near = np.abs((st["heading"] - h0 + np.pi) % (2 * np.pi) - np.pi) <= STRAIGHT_ON_RAD
@@ -297,6 +306,28 @@ class AttachmentWindows:
         cut = [(max(lo, a), min(hi, b)) for a, b in runs]
         cut = [r for r in cut if r[1] - r[0] >= LEVEL_RUN_M]
         return max(cut or runs, key=lambda r: r[1] - r[0])
+
+
+    def beside_part(self, parent: str) -> tuple[float, float] | None:
+        """The stations of the fitted ``parent`` level with its run beside its road
+        (:func:`flyover.geometry.beside.beside_run`, stations along the road), where it
+        is off the road's edge by a child's lane for a child joining it straight on;
+        ``None`` when it has no such run or none of it lies there."""
+        fit = self.fitted.fits.get(parent)
+        if fit is None:
+            return None
+        run = beside_run(self.moves, self.fitted.width, self.st, fit.spec, self.fitted)
+        if run is None:
+            return None
+        road = self.roads[ends(self.topo, parent)[1][0]]
+        st = self.fitted.stations[parent]
+        d = np.array([np.cos(road.heading), np.sin(road.heading)])
+        t = (st["xy"] - np.array(road.origin)) @ d
+        inside = (t >= run[0]) & (t <= run[1])
+        if not inside.any():
+            return None
+        s = st["s"][inside]
+        return float(s.min()), float(s.max())
 
 
 def beyond_continuation(moves: Movements, st: LayoutSettings, road: str, ramp: str,

@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["INF_REFERENCE_M", "RADIUS_TOLERANCE", "SHIFT_M", "TURNING_RAD", "inf_met",
-           "radius_met"]
+__all__ = ["INF_REFERENCE_M", "RADIUS_TOLERANCE", "SHIFT_M", "TURNING_RAD", "built_radius",
+           "inf_met", "radius_met"]
 
 #: the radius (m) an ``inf`` ramp is built with and held to (the default of
 #: :attr:`flyover.geometry.fit.FitSettings.inf_reference_m`)
@@ -43,6 +43,16 @@ TURNING_RAD = 0.5
 
 #: a ramp whose windows lie this far apart sideways (m) or more must shift: not straight
 SHIFT_M = 0.5
+
+
+def built_radius(target_m: float, reference_m: float = INF_REFERENCE_M) -> float:
+    """The radius (m) a ramp is built with for a radius target ``target_m``: the target, or
+    ``reference_m`` (``inf_reference_m``) where it is ``inf``.
+
+    >>> built_radius(60.0), built_radius(math.inf)
+    (60.0, 250.0)
+    """
+    return target_m if math.isfinite(target_m) else reference_m
 
 
 def inf_met(radius_m: float, reference_m: float = INF_REFERENCE_M) -> bool:

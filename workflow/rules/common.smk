@@ -241,7 +241,10 @@ def class_tables(stage):
 # 39: a split stub's free end slides clear of the road its chain runs beside also when
 #     its parent ends right of that road's band but within the stub's margin (half its
 #     width and 1 m): Columbus drawn set 15's r13 lay across I-270 (free_end.FreeEnds.
-#     beside_road); the catalog has no stub splitting off a stub (geometry_bytes unchanged)
+#     beside_road; the catalog has no stub splitting off a stub: geometry_bytes unchanged);
+#     and a ramp running beside the road before a straight-on child joins reaches
+#     its road's height first (RampSpec.end_z_first) and the child joins
+#     it within that run (rails.AttachmentWindows.beside_part): Columbus's r11 and r12
 GEOMETRY_VERSION = 39
 
 
