@@ -36,17 +36,29 @@ def wrap(a: float) -> float:
 
 
 def ends(topo: Topology, ramp: str) -> tuple[tuple[str, Label] | None, tuple[str, Label] | None]:
-    """``(parent, label)`` of the ramp's start (an ``Out-*`` edge) and end (``In-*``)."""
-    g = topo.graph
-    starts = sorted((u, d["label"]) for u, _, d in g.in_edges(ramp, data=True) if d["label"].is_out)
-    end = sorted((v, d["label"]) for _, v, d in g.out_edges(ramp, data=True)
-                 if not d["label"].is_out)
-    return (starts[0] if starts else None), (end[0] if end else None)
+    """``(parent, label)`` of the ramp's start (an ``Out-*`` edge) and end (``In-*``);
+    read once per topology (:meth:`Topology.derived`)."""
+    memo = topo.derived("ends")
+    if ramp not in memo:
+        g = topo.graph
+        starts = sorted((u, d["label"]) for u, _, d in g.in_edges(ramp, data=True)
+                        if d["label"].is_out)
+        end = sorted((v, d["label"]) for _, v, d in g.out_edges(ramp, data=True)
+                     if not d["label"].is_out)
+        memo[ramp] = (starts[0] if starts else None), (end[0] if end else None)
+    return memo[ramp]
 
 
-def road_of(topo: Topology, node: str, forward: bool, seen=None) -> str | None:
-    """The road a chain of ramps leads to (forward) or comes from."""
-    seen = seen or set()
+def road_of(topo: Topology, node: str, forward: bool) -> str | None:
+    """The road a chain of ramps leads to (forward) or comes from; followed once per
+    topology (:meth:`Topology.derived`)."""
+    memo = topo.derived("road_of")
+    if (node, forward) not in memo:
+        memo[node, forward] = _road_of(topo, node, forward, set())
+    return memo[node, forward]
+
+
+def _road_of(topo: Topology, node: str, forward: bool, seen: set[str]) -> str | None:
     if topo.graph.nodes[node]["kind"] is Kind.ROAD:
         return node
     if node in seen:
@@ -55,12 +67,12 @@ def road_of(topo: Topology, node: str, forward: bool, seen=None) -> str | None:
     start, end = ends(topo, node)
     nxt = end if forward else start
     if nxt is not None:
-        return road_of(topo, nxt[0], forward, seen)
+        return _road_of(topo, nxt[0], forward, seen)
     g = topo.graph
     others = sorted(v for _, v, d in g.out_edges(node, data=True)) if forward else \
         sorted(u for u, _, d in g.in_edges(node, data=True))
     for o in others:
-        r = road_of(topo, o, forward, seen)
+        r = _road_of(topo, o, forward, seen)
         if r:
             return r
     return None

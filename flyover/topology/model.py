@@ -118,10 +118,10 @@ class Topology:
     The graph is exposed as :attr:`graph`, a :class:`networkx.DiGraph` with
     node attributes ``kind`` (and ``expressway``, ``lanes`` for roads) and
     edge attributes ``label`` (a :class:`Label`) and ``pos``. Treat it as
-    read-only.
+    read-only: views derived from it are kept with the topology (:meth:`derived`).
     """
 
-    __slots__ = ("name", "graph", "source", "attrs")
+    __slots__ = ("name", "graph", "source", "attrs", "_derived")
 
     def __init__(self, name: str, graph: nx.DiGraph, source: str | None = None,
                  attrs: Mapping[str, object] | None = None):
@@ -129,6 +129,7 @@ class Topology:
         self.graph = graph
         self.source = source
         self.attrs = dict(attrs or {})
+        self._derived: dict[str, dict] = {}
 
     # -- construction -----------------------------------------------------
     @classmethod
@@ -172,6 +173,13 @@ class Topology:
         return topo
 
     # -- views --------------------------------------------------------------
+    def derived(self, view: str) -> dict:
+        """The memo of one view derived from the (read-only) graph, kept with this
+        topology and filled by whoever reads it (:func:`flyover.geometry.chains.ends`:
+        ``derived("ends")``, ramp → its ends): each view is computed once per topology,
+        never shared between two (a :meth:`relabeled` copy starts empty)."""
+        return self._derived.setdefault(view, {})
+
     @property
     def roads(self) -> tuple[str, ...]:
         """Road ids, sorted."""
