@@ -199,6 +199,11 @@ class RampSpec:
     #: road at that road's height: :func:`flyover.geometry.beside.merge_window`)
     end_z_first: bool = False
 
+    @property
+    def crest_at_end(self) -> bool:
+        """Its crest is its end's height (:attr:`end_z_first` with no ``z_crest``)."""
+        return self.z_crest is None and self.end_z_first
+
     def max_length_m(self, za: float, zc: float, zb: float, transition_m: float) -> float:
         """The longest this ramp may be with ends at heights ``za``, ``zb`` and crest ``zc``:
         ``length_ratio`` × the longer of :attr:`least_m` and its climb to its crest and down
@@ -356,7 +361,7 @@ def _decode(spec: RampSpec, x: np.ndarray, rails: tuple | None = None) -> _Decod
 
 
 def _crest(spec: RampSpec, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
-    if spec.z_crest is None and spec.end_z_first:
+    if spec.crest_at_end:
         return np.asarray(zb, float).copy()
     top = np.maximum(za, zb)
     return top if spec.z_crest is None else np.maximum(top, spec.z_crest)
@@ -420,7 +425,7 @@ def ramp_objective(spec: RampSpec, obstacles: Obstacles, settings: FitSettings):
     g = spec.target_slope_pct / 100.0
     stub = spec.free is not None
     args = (*_rail_args(spec), -np.inf if spec.z_crest is None else float(spec.z_crest),
-            float(spec.z_crest is None and spec.end_z_first), int(settings.samples),
+            float(spec.crest_at_end), int(settings.samples),
             float(spec.width_m), float(g), float(settings.transition_m),
             float(spec.target_radius_m), float(settings.inf_reference_m),
             float(spec.inf_floor_m),
