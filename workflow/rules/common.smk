@@ -245,7 +245,10 @@ def class_tables(stage):
 #     and a ramp running beside the road before a straight-on child joins reaches
 #     its road's height first (RampSpec.end_z_first) and the child joins
 #     it within that run (rails.AttachmentWindows.beside_part): Columbus's r11 and r12
-GEOMETRY_VERSION = 39
+# 40: a connector between two stubs' free ends keeps off, first, where a loop fitted after
+#     it leaves its road (state.LayoutState.loop_room; Columbus's r2 and the loop r5 at
+#     I-70 East); a fenced miss is kept over an unfenced miss that ranks no better
+GEOMETRY_VERSION = 40
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
