@@ -2,7 +2,7 @@
 
 import pytest
 
-from flyover.geometry.beside import child_room_fences
+from flyover.geometry.beside import RUN_SLACK_M, child_room_fences, run_slacks
 from flyover.geometry.layout import LayoutSettings, RampFeatures, build_interchange
 from flyover.geometry.state import LayoutState
 from flyover.topology.catalog import catalog_topologies
@@ -28,6 +28,19 @@ def test_j1_r1_and_r3_keep_a_lane_off_their_roads_outside_their_windows():
     assert fence[4:] == pytest.approx((-1e4, spec.end.lo, -edge - strip, -edge))
     # r4 has no child, r2 no road end
     assert child_room_fences(b.moves, b.width, b.st, b.spec("r4", feats["r4"])) == []
+
+
+def test_a_run_beside_the_road_is_tried_straight_then_narrow_then_twice_as_wide():
+    # Columbus's r11 (100-280 m) still turned in its run where only its first gap_m was
+    # held off the edge (drawn sets 5, 16, 29, 31); at 60 m it grazed the narrow slot on
+    # every try (sets 8, 14, 18, 21) and dropped the child's room
+    assert run_slacks(None) == ((False, 0.0),)
+    assert run_slacks((476.9, 556.9)) == ((True, 0.0), (True, RUN_SLACK_M), (False, 0.0),
+                                          (False, RUN_SLACK_M))
+    b, feats = _state("j1")  # no run: the slack changes nothing
+    spec = b.spec("r3", feats["r3"])
+    assert child_room_fences(b.moves, b.width, b.st, spec, slack=RUN_SLACK_M) == \
+        child_room_fences(b.moves, b.width, b.st, spec)
 
 
 def test_stubs_fork_at_their_free_end_and_keep_no_room_beside():

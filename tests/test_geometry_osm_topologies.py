@@ -780,3 +780,69 @@ def test_columbus_r2_leaves_the_loop_r5_room_where_it_leaves_i70_east():
     out = {o.ramp: o for o in ic.outcomes}
     for r in ("r2", "r5"):
         assert out[r].first_try_ok and out[r].fit.conflicts == 0, r
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+@pytest.mark.parametrize("sample,seed,lanes,feats", [
+    (18, 925531568, (4, 4, 3, 3), {"r1": (math.inf, 1.0), "r10": (280.0, 4.0),
+                                   "r11": (60.0, 5.0), "r12": (math.inf, 4.0),
+                                   "r13": (150.0, 0.0), "r14": (100.0, 5.0), "r2": (150.0, 2.0),
+                                   "r3": (40.0, 4.0), "r4": (100.0, 2.0), "r5": (30.0, 3.0),
+                                   "r6": (40.0, 5.0), "r7": (150.0, 5.0), "r8": (60.0, 3.0),
+                                   "r9": (60.0, 4.0)}),
+])
+def test_columbus_r11_at_60m_keeps_its_run_beside_i270_north_for_r12(sample, seed, lanes,
+                                                                       feats):
+    """Drawn set 18 of benchmarks/geometry.py --osm (its seed): r11 at 60 m, round
+    the loop r6, could not keep within the child's room (RUN_SLACK_M 4: the edge strip
+    and the run's band left its centre a 4 m slot over the run's first 40 m; every try
+    grazed one or the other in 2-3 samples), so it was fitted without them, merged
+    before its run at r1's 7 m, and r12 (inf) bent to 18 m to join it there (set 8, the
+    same cause, builds r12 first try here on main too: without the benchmark's resampler
+    r2 is not resampled before r11). Now r11 tries a slot twice as wide
+    (beside.run_slacks) before it drops the child's room: it keeps its run, and r12
+    joins it there straight."""
+    from flyover.geometry.straight import inf_met  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes))
+    feats = {r: RampFeatures(*v) for r, v in feats.items()}
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=sample,
+                           seed=seed)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r11"].first_try_ok and out["r12"].first_try_ok
+    r11, r12 = out["r11"].fit, out["r12"].fit
+    assert r11.spec.end_z_first  # fitted within its run, not on the plain spec
+    assert r11.end_pose[3] == pytest.approx(0.0, abs=1e-6)
+    assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
+    assert abs(r12.end_pose[3] - r12.start_pose[3]) < 1.0  # level with r13's end
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r11_runs_straight_beside_i270_north_where_r12_joins():
+    """Drawn set 16 of benchmarks/geometry.py --osm (its seed): r11 (100 m) kept its run's
+    band, but only the run's first gap_m was also kept off the road's edge, so it was
+    still turning over the rest (97.4 -> 94.0 deg against the road's 90 deg). r12 (inf)
+    from r13's end (at 89.1 deg, about on r11's line) got 44 m of window on it, wound
+    1,800-2,000 m east and back and met r11. Now r11 is first held off the edge over the
+    whole run (beside.run_slacks): it runs straight there and r12 joins it first try."""
+    from flyover.geometry.straight import inf_met  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (3, 5, 5, 4)))
+    feats = {r: RampFeatures(*v) for r, v in {
+        "r1": (150.0, 4.0), "r10": (210.0, 4.0), "r11": (100.0, 1.0), "r12": (math.inf, 2.0),
+        "r13": (math.inf, 0.0), "r14": (210.0, 2.0), "r2": (150.0, 5.0), "r3": (150.0, 4.0),
+        "r4": (60.0, 5.0), "r5": (30.0, 2.0), "r6": (60.0, 3.0), "r7": (40.0, 2.0),
+        "r8": (210.0, 2.0), "r9": (210.0, 2.0)}.items()}
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=16,
+                           seed=3499249847)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r11"].first_try_ok and out["r12"].first_try_ok
+    r12 = out["r12"].fit
+    assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
+    assert r12.length_m < 1000.0  # straight on, not round and back

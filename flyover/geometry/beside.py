@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from flyover.geometry.fitted import FittedRamps
 
 __all__ = ["RUN_SLACK_M", "beside_run", "child_room_fences", "joins_straight_on",
-           "merge_window"]
+           "merge_window", "run_slacks"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,8 @@ class _Side:
 
 def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
                       spec: RampSpec, fitted: FittedRamps | None = None,
-                      run: tuple[float, float] | None = None) -> list[tuple[float, ...]]:
+                      run: tuple[float, float] | None = None,
+                      slack: float = 0.0, to_end: bool = False) -> list[tuple[float, ...]]:
     """Fences (road-frame bands ``x0, y0, dx, dy, t_lo, t_hi, lat_lo, lat_hi``) keeping the
     ramp of ``spec`` off the strip along its road's right edge, as wide as itself and its
     widest child attached on its left and 1 m, beyond its start window (leaving the road
@@ -65,7 +66,9 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
     its station to the window (``r11``, fitted round the loop ``r6``, passed just beyond
     ``r13``'s end and left ``r12`` no way north but a tight turn into it). ``run``: the
     ramp's run beside its road for such a child (:func:`beside_run`, as
-    :func:`merge_window` took it; with ``fitted`` only)."""
+    :func:`merge_window` took it; with ``fitted`` only); ``slack``: the room (m) across
+    that run beyond its own width and :data:`RUN_SLACK_M`, ``to_end``: off the edge to
+    the run's end, not only over its first ``gap_m`` (:func:`run_slacks`)."""
     ramp, g = spec.id, moves.g
     if moves.is_stub(ramp):
         return []
@@ -87,12 +90,12 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
         along = (rail.hi, 1e4) if leaving else (-1e4, rail.lo)
         beside = None if fitted is None or leaving else run
         if beside is not None:  # off the edge until the child has joined it (a taper)
-            along = (-1e4, beside[0] + st.gap_m)
+            along = (-1e4, beside[1] if to_end else beside[0] + st.gap_m)
         frame = (road.origin[0], road.origin[1], math.cos(road.heading), math.sin(road.heading))
         out.append((*frame, *along, -side.edge - strip, -side.edge))
         if beside is not None:  # and no farther off than its own width and a lane
             out.append((*frame, *beside, -1e4,
-                        -side.edge - strip - spec.width_m - RUN_SLACK_M))
+                        -side.edge - strip - spec.width_m - RUN_SLACK_M - slack))
         if fitted is not None:
             out += _free_end_room(moves, width, fitted, side)
     return out
@@ -101,6 +104,23 @@ def child_room_fences(moves: Movements, width: Mapping[str, float], st: LayoutSe
 #: the room (m) a ramp running beside its road for a child (:func:`beside_run`) has
 #: across, beyond its own width: it runs within a lane's width of straight
 RUN_SLACK_M = 4.0
+
+
+def run_slacks(run: tuple[float, float] | None) -> tuple[tuple[bool, float], ...]:
+    """How a ramp with a run beside its road (:func:`beside_run`) tries to keep it, in
+    turn (:func:`child_room_fences`' ``to_end`` and ``slack``): off the road's edge over
+    the whole run, within a slot :data:`RUN_SLACK_M` across (it runs straight there),
+    then within one twice as wide; then off the edge over the run's first ``gap_m``
+    only, in the narrow slot, then in the wide one. Columbus's ``r11`` (100-280 m) kept to the run's band
+    but still turned over the part not held off the edge (97.4 -> 94.0° on drawn set
+    16, the road at 90°), and ``r12`` straight on from ``r13``'s end got 25-44 m of it
+    and met ``r11`` (sets 5, 16, 29, 31). ``r11`` at 60 m, round ``r6`` and in from
+    40-55° off I-270 North, grazed the 4 m slot in 1-5 samples on every try (sets 8, 14,
+    18, 21) and was fitted without the child's room, merging before its run. ``((False,
+    0.0),)`` without a run."""
+    if run is None:
+        return ((False, 0.0),)
+    return ((True, 0.0), (True, RUN_SLACK_M), (False, 0.0), (False, RUN_SLACK_M))
 
 
 def joins_straight_on(moves: Movements, fitted: FittedRamps, kid: str, label: Label) -> bool:

@@ -58,7 +58,7 @@ from dataclasses import dataclass, replace
 from typing import Callable, Mapping
 
 from flyover.geometry.assemble import assemble
-from flyover.geometry.beside import beside_run, child_room_fences, merge_window
+from flyover.geometry.beside import beside_run, child_room_fences, merge_window, run_slacks
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
 from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
@@ -363,14 +363,19 @@ def _round_fit(b: LayoutState, ramp: str, spec: RampSpec, loops: frozenset[str],
     A stub (Columbus's r1 round r6) also keeps out of where its child turns round the loop
     (:meth:`LoopRoom.connector_fences`), and a connector with a child on its road's side
     (Columbus's r11 with r12) off that road's edge before its window
-    (:func:`child_room_fences`); if it cannot go round within the child's room, it goes
-    round without it: a bridge over the loop is worse than a tight child."""
+    (:func:`child_room_fences`; over its run beside the road for a child joining it
+    straight on, held off the edge all along it in a slot of
+    :data:`flyover.geometry.beside.RUN_SLACK_M`, then in one twice as wide, then so
+    only over its first ``gap_m``: :func:`flyover.geometry.beside.run_slacks`); if it
+    cannot go round within the child's
+    room, it goes round without it: a bridge over the loop is worse than a tight child."""
     own = tuple(b.windows.loops.connector_fences(ramp))
     # with the child's room, its end window reaches beyond where it runs beside its road
     run = beside_run(b.moves, b.width, b.st, spec, b.fitted)
     wide = merge_window(b.moves, b.width, b.st, spec, b.fitted, run)
     edges = [(wide, own + tuple(child_room_fences(b.moves, b.width, b.st, wide, b.fitted,
-                                                  run)))]
+                                                  run, slack, to_end)))
+             for to_end, slack in run_slacks(run)]
     edges += [(spec, own)] if edges[0][1] != own else []
     for sp, edge in edges:
         more = replace(sp, pieces=sp.pieces + 1)

@@ -247,7 +247,12 @@ def class_tables(stage):
 #     it within that run (rails.AttachmentWindows.beside_part): Columbus's r11 and r12
 # 40: a connector between two stubs' free ends keeps off, first, where a loop fitted after
 #     it leaves its road (state.LayoutState.loop_room; Columbus's r2 and the loop r5 at
-#     I-70 East); a fenced miss is kept over an unfenced miss that ranks no better
+#     I-70 East); a fenced miss is kept over an unfenced miss that ranks no better;
+#     and a connector round its loop with a run beside its road for a straight-on child
+#     is first held off the road's edge over the whole run (it runs straight there), then
+#     in a slot twice as wide, then only over its first gap_m (both slots) as before, before
+#     it drops the child's room (beside.run_slacks): Columbus's r11 and r12 (no catalog
+#     design has a straight-on child)
 GEOMETRY_VERSION = 40
 
 
