@@ -103,12 +103,18 @@ class RampSpecs:
             extra = max(extra, self.levels.kids_room(outs, z_a, turning=False))
             extra_b = max(extra_b, self.levels.kids_room(ins, z_b, turning=False))
         w = self.windows
+        # an end on a fitted ramp first (its window takes no bound): the climb that bounds
+        # how far out the other end may attach to its road is read where it joins
+        on_ramp = [w.rail(ramp, feat, e, k == 0, loop, width, x, None, level)
+                   if e is not None and e[0] not in self.roads else None
+                   for k, (e, x) in enumerate(((start, extra), (end, extra_b)))]
         bound = None
         if st.length_margin is not None and start is not None and end is not None \
                 and not self.moves.same_road(ramp):
-            bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end)
-        a = w.rail(ramp, feat, start, True, loop, width, extra, bound, level) if start else None
-        b = w.rail(ramp, feat, end, False, loop, width, extra_b, bound, level) if end else None
+            bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end, on_ramp)
+        a, b = (r if r is not None else
+                w.rail(ramp, feat, e, k == 0, loop, width, x, bound, level) if e else None
+                for k, (r, e, x) in enumerate(zip(on_ramp, (start, end), (extra, extra_b))))
         crest = plan.get(ramp)
         cd = self.moves.same_road(ramp)  # a collector-distributor road: no search, no bound
         bounded = st.max_length_ratio is not None and not cd
@@ -136,16 +142,26 @@ class RampSpecs:
         path = shortest(pa[:, None, :], ha[:, None], pb[None, :, :], hb[None, :], r)
         return max(arc, float(path.min()))
 
-    def need_m(self, turn: float, feat: RampFeatures, start, end) -> float:
+    def need_m(self, turn: float, feat: RampFeatures, start, end,
+               rails: tuple | list = (None, None)) -> float:
         """What a ramp between two attached ends needs beyond the room it keeps from the
         crossing (which holds a flyover's climb): its turn at its target radius (an
         ``inf`` target: at ``inf_reference_m``) or the climb between its ends at its
-        slope, whichever is longer, and a taper (``gap_m``) at each end."""
+        slope, whichever is longer, and a taper (``gap_m``) at each end. An end on a
+        fitted ramp with its window in ``rails`` is at that ramp's height within the
+        window nearest the other end's (the least climb), else at its mean height
+        (Columbus's ``r7`` onto ``r3``'s 19.5 m plateau, from I-70 East at 6.5 m: ``r3``'s
+        mean of 13-15 m gave half the climb, and a start window on I-70 East too near
+        the crossing for 210-280 m at 2-4 %)."""
         st = self.st
         r = feat.radius_m if np.isfinite(feat.radius_m) else st.fit.inf_reference_m
         g = max(feat.slope_pct, 0.5) / 100.0
-        climb = float(climb_distance(self.fitted.end_z(end) - self.fitted.end_z(start), g,
-                                     st.fit.transition_m))
+        z = [self.fitted.end_z(start), self.fitted.end_z(end)]
+        for k, rail in enumerate(rails):
+            if rail is not None:
+                zs = rail.at(np.linspace(rail.lo, rail.hi, 24))[2]
+                z[k] = float(zs[np.argmin(np.abs(zs - z[1 - k]))])
+        climb = float(climb_distance(z[1] - z[0], g, st.fit.transition_m))
         return max(abs(turn) * r, climb) + 2.0 * st.gap_m
 
     def _leads(self, start, end, crest, free, feat: RampFeatures) -> tuple:

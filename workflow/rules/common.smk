@@ -253,7 +253,10 @@ def class_tables(stage):
 #     in a slot twice as wide, then only over its first gap_m (both slots) as before, before
 #     it drops the child's room (beside.run_slacks): Columbus's r11 and r12 (no catalog
 #     design has a straight-on child)
-GEOMETRY_VERSION = 40
+# 41: the length that bounds how far out a ramp's end attaches to its road reads the climb
+#     to a fitted parent ramp at the parent's height within the child's window there, not
+#     the parent's mean height (RampSpecs.need_m): Columbus's r7 onto r3's plateau
+GEOMETRY_VERSION = 41
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
