@@ -148,8 +148,9 @@ class RampSpecs:
         crossing (which holds a flyover's climb): its turn at its target radius (an
         ``inf`` target: at ``inf_reference_m``) or the climb between its ends at its
         slope, whichever is longer, and a taper (``gap_m``) at each end. An end on a
-        fitted ramp with its window in ``rails`` is at that ramp's height within the
-        window nearest the other end's (the least climb), else at its mean height
+        fitted ramp with its window along it in ``rails`` is at that ramp's height within
+        the window nearest the other end's (the least climb), else (none given, or a
+        stub's free end) at its mean height
         (Columbus's ``r7`` onto ``r3``'s 19.5 m plateau, from I-70 East at 6.5 m: ``r3``'s
         mean of 13-15 m gave half the climb, and a start window on I-70 East too near
         the crossing for 210-280 m at 2-4 %)."""
@@ -158,7 +159,8 @@ class RampSpecs:
         g = max(feat.slope_pct, 0.5) / 100.0
         z = [self.fitted.end_z(start), self.fitted.end_z(end)]
         for k, rail in enumerate(rails):
-            if rail is not None:
+            if rail is not None and rail.hi - rail.lo > 1.0:  # a window along it, not at
+                # its free end (one point: where it ends, its mean as before)
                 zs = rail.at(np.linspace(rail.lo, rail.hi, 24))[2]
                 z[k] = float(zs[np.argmin(np.abs(zs - z[1 - k]))])
         climb = float(climb_distance(z[1] - z[0], g, st.fit.transition_m))
