@@ -789,7 +789,7 @@ def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau():
     I-70 East at 6.5 m and joins the flyover r3 where r3 is level: on its 19.5 m plateau.
     Its start window on I-70 East reaches no farther back than 1.5 x what it needs beyond
     the crossing's room (34.5 m), and the climb in that was read to r3's mean height
-    (about 12 m): 702 m back, and r7 turned at 171.5 m (2.19 %) and missed its first
+    (about 13 m): 702 m back, and r7 turned at 171.5 m (2.19 %) and missed its first
     try. Now the climb is read at r3's height in r7's window: 13 m at 2 % with a 40 m
     vertical curve is 690 m, and 40 m tapers: 34.5 + 1.5 x 770 = 1,189.5 m back."""
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
