@@ -255,7 +255,9 @@ def class_tables(stage):
 #     design has a straight-on child)
 # 41: the length that bounds how far out a ramp's end attaches to its road reads the climb
 #     to a fitted parent ramp at the parent's height within the child's window there, not
-#     the parent's mean height (RampSpecs.need_m): Columbus's r7 onto r3's plateau
+#     the parent's mean height (RampSpecs.need_m; a stub's free end keeps its mean):
+#     Columbus's r7 onto r3's plateau; of the catalog, trumpet changes (geometry_bytes 3:
+#     trumpet 1 and 2)
 GEOMETRY_VERSION = 41
 
 
