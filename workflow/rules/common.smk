@@ -253,7 +253,11 @@ def class_tables(stage):
 #     in a slot twice as wide, then only over its first gap_m (both slots) as before, before
 #     it drops the child's room (beside.run_slacks): Columbus's r11 and r12 (no catalog
 #     design has a straight-on child)
-GEOMETRY_VERSION = 40
+# 41: a straight-on child's window on its parent takes in the parent's whole run beside
+#     its road (rails.AttachmentWindows.reach_run), and the free end it leaves is held
+#     within 0.03 rad of that road's heading (free_end.FreeEnds.straight_on_turn):
+#     Columbus's r12, r11 and r13 (no catalog design has a straight-on child)
+GEOMETRY_VERSION = 41
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
