@@ -28,22 +28,17 @@ from dataclasses import replace
 
 import numpy as np
 
-from flyover.geometry.chains import Movements, ends, road_of, wrap
+from flyover.geometry.chains import Movements, ends, road_of
 from flyover.geometry.fit import FreeEnd
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.levels import LevelPlan
 from flyover.geometry.profile import climb_distance, loop_radius
 from flyover.geometry.settings import Z_MARGIN, LayoutSettings, RampFeatures
-from flyover.topology.model import Label
 
-__all__ = ["FreeEnds", "COLLECTOR_TURN_RAD", "STRAIGHT_ON_HOLD_RAD"]
+__all__ = ["FreeEnds", "COLLECTOR_TURN_RAD"]
 
 #: how far (rad) the end of a collector road's first stub may turn from its start's heading
 COLLECTOR_TURN_RAD = 0.1
-
-#: how far (rad) the free end of a stub may head off the road a straight-on child of that
-#: end runs along (:meth:`FreeEnds.straight_on_turn`)
-STRAIGHT_ON_HOLD_RAD = 0.03
 
 
 class FreeEnds:
@@ -84,37 +79,7 @@ class FreeEnds:
             free = replace(free, turn=(-COLLECTOR_TURN_RAD, COLLECTOR_TURN_RAD))
         if start is not None and start[0] not in self.roads:  # a split of a split
             free = replace(free, lateral=self.beside_road(ramp, start, free, width))
-        if (held := self.straight_on_turn(ramp, start, end, free.turn)) is not None:
-            free = replace(free, turn=held)
         return free, stub_extra
-
-    def straight_on_turn(self, ramp: str, start, end, turn: tuple[float, float]
-                         ) -> tuple[float, float] | None:
-        """The turn range of the free end of the stub ``ramp`` held within
-        :data:`STRAIGHT_ON_HOLD_RAD` of the heading of a road that a child leaving that end
-        runs along straight on: the child joins, on its left, a ramp that joins that road on
-        its right (Columbus's ``r13``, whose child ``r12`` joins ``r11`` where it runs beside
-        I-270 North: ``r12`` runs straight, radius ``inf``, only if ``r13`` ends about
-        parallel to the road; drawn sets 21 and 31: ``r13`` ended 12.6° and 17° off it and
-        ``r12`` turned at 45-220 m). ``None`` for any other stub, or when ``turn`` does not
-        reach that heading."""
-        if start is None or end is not None or start[0] not in self.fitted.stations:
-            return None
-        heads = []
-        for kid in self.moves.kids(ramp):
-            k_start, k_end = ends(self.topo, kid)
-            if k_start is None or k_start[0] != ramp or k_end is None \
-                    or k_end[1] is not Label.IN_L or k_end[0] in self.roads:
-                continue
-            p_end = ends(self.topo, k_end[0])[1]
-            if p_end is not None and p_end[1] is Label.IN_R and p_end[0] in self.roads:
-                heads.append(self.roads[p_end[0]].heading)
-        if not heads:
-            return None
-        _, h0 = self.fitted.start_pose(ramp, start)
-        c = wrap(heads[0] - h0)
-        lo, hi = max(turn[0], c - STRAIGHT_ON_HOLD_RAD), min(turn[1], c + STRAIGHT_ON_HOLD_RAD)
-        return (float(lo), float(hi)) if lo < hi else None
 
     def free_z(self, ramp: str, start, end) -> float:
         """The height of the free end of the stub ``ramp`` (one of ``start``, ``end`` is

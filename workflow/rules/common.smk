@@ -254,9 +254,8 @@ def class_tables(stage):
 #     it drops the child's room (beside.run_slacks): Columbus's r11 and r12 (no catalog
 #     design has a straight-on child)
 # 41: a straight-on child's window on its parent takes in the parent's whole run beside
-#     its road (rails.AttachmentWindows.reach_run), and the free end it leaves is held
-#     within 0.03 rad of that road's heading (free_end.FreeEnds.straight_on_turn):
-#     Columbus's r12, r11 and r13 (no catalog design has a straight-on child)
+#     its road (rails.AttachmentWindows.reach_run): Columbus's r12 on r11 (no catalog
+#     design has a straight-on child)
 GEOMETRY_VERSION = 41
 
 
