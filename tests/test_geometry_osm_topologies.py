@@ -874,3 +874,36 @@ def test_columbus_r11_runs_straight_beside_i270_north_where_r12_joins():
     r12 = out["r12"].fit
     assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
     assert r12.length_m < 1000.0  # straight on, not round and back
+
+
+def _columbus_set(lanes, feats):
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    return (topo, dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes)),
+            {r: RampFeatures(*v) for r, v in feats.items()})
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r12_window_takes_in_r11s_whole_run_beside_i270_north():
+    """Drawn set 25 of benchmarks/geometry.py --osm (its seed): r11 (210 m) goes round
+    the loop r6 and runs beside I-270 North near its end, at 1,759-1,836 m of 2,085 m;
+    r12's window on it was 40-85 % of r11 (rails.AttachmentWindows.ramp_rail), so only
+    14 m of the run was left and r12 (inf) turned into it at 66 m. Now the window takes
+    in the whole run (AttachmentWindows.reach_run): r12 joins it straight."""
+    from flyover.geometry.straight import inf_met  # noqa: PLC0415
+
+    topo, lanes, feats = _columbus_set((5, 5, 5, 3), {
+        "r1": (280.0, 1.0), "r10": (math.inf, 1.0), "r11": (210.0, 1.0),
+        "r12": (math.inf, 3.0), "r13": (100.0, 0.0), "r14": (150.0, 3.0), "r2": (150.0, 5.0),
+        "r3": (60.0, 1.0), "r4": (150.0, 1.0), "r5": (30.0, 1.0), "r6": (30.0, 2.0),
+        "r7": (280.0, 5.0), "r8": (30.0, 5.0), "r9": (60.0, 4.0)})
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=25,
+                           seed=1656115918)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r12"].first_try_ok
+    r12 = out["r12"].fit
+    assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
+    assert r12.spec.end.hi - r12.spec.end.lo > 50.0  # most of the 80 m run
+

@@ -259,7 +259,7 @@ class AttachmentWindows:
             elif is_start:
                 lo, hi = 0.15 * length, 0.6 * length
             else:
-                lo, hi = 0.4 * length, 0.85 * length
+                lo, hi = self.reach_run(parent, ramp, label, 0.4 * length, 0.85 * length)
             lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
                                  lo, hi)
             for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
@@ -307,6 +307,24 @@ class AttachmentWindows:
         cut = [r for r in cut if r[1] - r[0] >= LEVEL_RUN_M]
         return max(cut or runs, key=lambda r: r[1] - r[0])
 
+
+    def reach_run(self, parent: str, ramp: str, label: Label, lo: float, hi: float
+                  ) -> tuple[float, float]:
+        """``lo..hi`` (stations on ``parent``) widened to take in the parent's run beside
+        its road (:meth:`beside_part`) for a child joining it straight on
+        (:func:`flyover.geometry.beside.joins_straight_on`), within 5-95 % of the parent;
+        unchanged for any other child. Columbus's ``r11`` goes round the loop ``r6`` and runs
+        beside I-270 North near its end: its run lay beyond 85 % of it (drawn sets 11, 31:
+        1,414 m of 1,631 m, 1,639 m of 1,881 m) or straddled it (sets 21, 25: 14-23 m of the
+        80 m run left), so ``r12`` joined past the run or had to turn into a few metres of
+        it (radius 45-219 m for an ``inf`` target)."""
+        if not joins_straight_on(self.moves, self.fitted, ramp, label):
+            return lo, hi
+        run = self.beside_part(parent)
+        if run is None:
+            return lo, hi
+        length = float(self.fitted.stations[parent]["s"][-1])
+        return max(min(lo, run[0]), 0.05 * length), min(max(hi, run[1]), 0.95 * length)
 
     def beside_part(self, parent: str) -> tuple[float, float] | None:
         """The stations of the fitted ``parent`` level with its run beside its road
