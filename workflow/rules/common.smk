@@ -257,9 +257,9 @@ def class_tables(stage):
 #     to a fitted parent ramp at the parent's height within the child's window there, not
 #     the parent's mean height (RampSpecs.need_m; a stub's free end keeps its mean):
 #     Columbus's r7 onto r3's plateau; of the catalog, trumpet changes (geometry_bytes 3:
-#     trumpet 1 and 2); and a straight-on child's window on its parent takes in the parent's whole run beside
-#     its road (rails.AttachmentWindows.reach_run): Columbus's r12 on r11 (no catalog
-#     design has a straight-on child)
+#     trumpet 1 and 2); and a straight-on child's window on its parent takes in the
+#     parent's whole run beside its road (rails.AttachmentWindows.reach_run): Columbus's
+#     r12 on r11 (no catalog design has a straight-on child)
 GEOMETRY_VERSION = 41
 
 
