@@ -373,19 +373,23 @@ def _round_fit(b: LayoutState, ramp: str, spec: RampSpec, loops: frozenset[str],
     # with the child's room, its end window reaches beyond where it runs beside its road
     run = beside_run(b.moves, b.width, b.st, spec, b.fitted)
     wide = merge_window(b.moves, b.width, b.st, spec, b.fitted, run)
+    # lifts and restarts (:func:`_fit_with_levels`) only where they were seen to help: the
+    # run's slot twice as wide held to its end, or no run; in the other slots, a third seed
     edges = [(wide, own + tuple(child_room_fences(b.moves, b.width, b.st, wide, b.fitted,
-                                                  run, slack, to_end)))
-             for to_end, slack in run_slacks(run)]
-    edges += [(spec, own)] if edges[0][1] != own else []
-    for sp, edge in edges:
+                                                  run, slack, to_end)),
+              run is None or (to_end and slack > 0)) for to_end, slack in run_slacks(run)]
+    edges += [(spec, own, True)] if edges[0][1] != own else []
+    for sp, edge, restarts in edges:
         more = replace(sp, pieces=sp.pieces + 1)
-        for n, again in enumerate((replace(more, lead_m=(None, None)), more)):
+        plain = replace(more, lead_m=(None, None))
+        for n, again in enumerate((plain, more) if restarts else (plain, more, plain)):
             kept = spent.fit(fit_ramp(again, b.obstacles(loops, edge), b.st.fit, seed=rseed + n))
             if kept.ok and kept.conflicts == 0:
                 return kept
-        kept = spent(_fit_with_levels(b, more, rseed + 2, loops, edge))
-        if kept.ok and kept.conflicts == 0:
-            return kept
+        if restarts:
+            kept = spent(_fit_with_levels(b, more, rseed + 2, loops, edge))
+            if kept.ok and kept.conflicts == 0:
+                return kept
     return None
 
 

@@ -253,7 +253,11 @@ def class_tables(stage):
 #     in a slot twice as wide, then only over its first gap_m (both slots) as before, before
 #     it drops the child's room (beside.run_slacks): Columbus's r11 and r12 (no catalog
 #     design has a straight-on child)
-GEOMETRY_VERSION = 40
+# 41: that connector is lifted and restarted only in the slot twice as wide to the run's
+#     end (and on the plain spec); in the other slots a third seed instead
+#     (build._round_fit: CPU only on 32 drawn Columbus sets, where those restarts never
+#     met the fences; a set where one would have changes shape; no catalog design has a run)
+GEOMETRY_VERSION = 41
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
