@@ -259,9 +259,10 @@ def class_tables(stage):
 #     Columbus's r7 onto r3's plateau; of the catalog, trumpet changes (geometry_bytes 3:
 #     trumpet 1 and 2); and a straight-on child's window on its parent takes in the
 #     parent's whole run beside its road (rails.AttachmentWindows.reach_run): Columbus's
-#     r12 on r11 (no catalog design has a straight-on child); a connector keeping
-#     its run beside its road for a straight-on child is lifted and restarted only in the slot twice as wide to the run's
-#     end (and on the plain spec); in the other slots a third seed instead
+#     r12 on r11 (no catalog design has a straight-on child); a connector keeping its
+#     run beside its road for a straight-on child is lifted and restarted only in the
+#     slot twice as wide to the run's end (and on the plain spec); in the other slots a
+#     third seed instead
 #     (build._round_fit: CPU only on 32 drawn Columbus sets, where those restarts never
 #     met the fences; a set where one would have changes shape; no catalog design has a run)
 GEOMETRY_VERSION = 41
