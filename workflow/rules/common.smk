@@ -256,8 +256,9 @@ def class_tables(stage):
 # 41: a ramp whose fits all missed only by their slope (no conflict, shorter than its climb
 #     at its slope target: every restart starts near the shortest path between its windows)
 #     is searched again from detours about as long as its climb (build._detours: Dubins
-#     paths through a waypoint, then random shapes long enough); kept only if it meets its
-#     targets (Columbus's r2 at 1 %; catalog bytes unchanged)
+#     paths through a waypoint, then random shapes long enough), no longer than twice its
+#     climb; kept only if it meets its targets (Columbus's r2 at 1 %; catalog bytes
+#     unchanged)
 GEOMETRY_VERSION = 41
 
 
