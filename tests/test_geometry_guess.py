@@ -108,3 +108,25 @@ def test_a_turbine_right_turn_merging_far_out_meets_its_radius_at_the_first_try(
     out = {o.ramp: o for o in ic.outcomes}
     assert out["rB2"].first_try_ok, out["rB2"].infeasible
     assert out["rB2"].fit.length_m > 1000.0
+
+
+def test_detours_are_about_as_long_as_asked_and_longer_than_the_shortest_path():
+    """A right turn between two fixed points 770 m apart climbing 11.5 m at 1 % (Columbus's
+    r2 between two stubs' free ends) needs about 1,190 m; its shortest path at 150 m is
+    about 800 m. Every detour asked for 1,190 m is a path of 1,190-1,666 m
+    (DETOUR_SLACK); decoded (its cubics, clipped to the search bounds) none is as short
+    as the shortest path."""
+    from flyover.geometry.guess import DETOUR_PIECES, DETOUR_SLACK, detour_guesses  # noqa: PLC0415
+
+    a = Rail.line("A", "Out-R", (43.0, -428.0), np.pi / 2, 0.5, 0.0, 0.0, 0.0)
+    b = Rail.line("B", "In-R", (713.0, -55.0), 0.0, 12.0, 0.0, 0.0, 0.0)
+    spec = RampSpec("r", a, b, None, -np.pi / 2, 1, W, 150.0, 1.0)
+    shortest = dubins_guess(spec).word.length
+    assert 780.0 < shortest < 830.0
+    x = detour_guesses(spec, 1190.0)
+    assert len(x) > 10
+    sp = replace(spec, pieces=DETOUR_PIECES)
+    lengths = [measure(sp, row, Obstacles(), FitSettings()).length_m for row in x]
+    assert min(lengths) > shortest
+    assert detour_guesses(replace(spec, target_radius_m=math.inf), 1190.0).shape == (0, x.shape[1])
+    assert DETOUR_SLACK > 1.0

@@ -942,3 +942,29 @@ def test_columbus_r11_is_not_restarted_in_the_narrow_slot_it_grazes(monkeypatch)
     assert out["r11"].first_try_ok and out["r12"].first_try_ok
     assert out["r11"].fit.spec.end_z_first  # kept its run for r12
     assert ("r11", True) not in calls  # no lifts nor restarts round r6
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r2_climbing_further_than_its_shortest_path_detours_for_its_climb():
+    """Drawn set 29 of benchmarks/geometry.py --osm (its seed): r2 (60 m / 1 %, from r8's
+    free end at 0.5 m to r14's at 12 m, 626 m apart at least) needs 1,190 m to climb
+    11.5 m at 1 %; every restart started near the shortest path and came out 629-825 m
+    long at 1.46-1.95 % with no conflict (or with one), so it missed its first try. Now a
+    search started from detours as long as its climb (build._detours) meets its targets,
+    no longer than twice its climb (build.DETOUR_LENGTH_RATIO)."""
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (4, 4, 5, 5)))
+    feats = {r: RampFeatures(*v) for r, v in {
+        "r1": (280.0, 1.0), "r10": (210.0, 3.0), "r11": (280.0, 2.0), "r12": (math.inf, 4.0),
+        "r13": (math.inf, 0.0), "r14": (math.inf, 2.0), "r2": (60.0, 1.0), "r3": (30.0, 2.0),
+        "r4": (280.0, 2.0), "r5": (40.0, 4.0), "r6": (30.0, 5.0), "r7": (280.0, 3.0),
+        "r8": (60.0, 1.0), "r9": (150.0, 3.0)}.items()}
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=29,
+                           seed=1795170021)
+    r2 = {o.ramp: o for o in ic.outcomes}["r2"]
+    assert r2.first_try_ok and r2.fit.conflicts == 0
+    assert r2.fit.max_slope_pct == pytest.approx(1.0, abs=0.2)
+    assert 1_150.0 < r2.fit.length_m <= r2.fit.max_length_m <= 2.0 * 1_190.0 + 80.0

@@ -57,13 +57,18 @@ import math
 from dataclasses import dataclass, replace
 from typing import Callable, Mapping
 
+import numpy as np
+
 from flyover.geometry.assemble import assemble
 from flyover.geometry.beside import beside_run, child_room_fences, merge_window, run_slacks
 from flyover.geometry.collector import collector_fit
 from flyover.geometry.check import same_level_conflicts
-from flyover.geometry.fit import RampFit, RampSpec, conflicts_with, fit_ramp, recount
-from flyover.geometry.guess import can_guess, dubins_guess
+from flyover.geometry.fit import (
+    RampFit, RampSpec, bounds, conflicts_with, fit_ramp, ranked_starts, recount,
+)
+from flyover.geometry.guess import DETOUR_PIECES, can_guess, detour_guesses, dubins_guess
 from flyover.geometry.model import InterchangeGeometry
+from flyover.geometry.profile import climb_distance
 from flyover.geometry.settings import GeometryError, LayoutSettings, RampFeatures
 from flyover.geometry.state import LayoutState
 from flyover.geometry.terminals import terminal_fences
@@ -163,7 +168,67 @@ def _fit_with_levels(b: LayoutState, spec: RampSpec, seed: int,
         evals += fit.evaluations
         secs += fit.seconds
         best = min([best, fit], key=_restart_rank)
+    if guess and _slope_short(best, st.fit.transition_m):
+        for fit in _detours(spec, best, obst, st, seed + 104_729 * (len(restarts) + 1)):
+            evals += fit.evaluations
+            secs += fit.seconds
+            if fit.ok:
+                return fit, evals, secs
     return best, evals, secs
+
+
+#: random decision vectors a detour search picks its starts from (:func:`_detours`)
+DETOUR_DRAWS = 2048
+#: starts (population members) a detour search is given
+DETOUR_STARTS = 8
+#: a detour is no longer than this many times the least its ramp needs (its climb), and
+#: its tapers (the spec's own bound, ``max_length_ratio``, if tighter)
+DETOUR_LENGTH_RATIO = 2.0
+
+
+def _slope_short(fit: RampFit, transition_m: float) -> bool:
+    """A miss only by its slope: no conflict, too steep, shorter than its climb at its slope
+    target needs (the shortest paths between its windows are too short for it)."""
+    g = fit.spec.target_slope_pct
+    return (not fit.ok and fit.conflicts == 0 and g > 0 and not fit.slope_ok
+            and fit.max_slope_pct > g and fit.length_m < _climb_m(fit, transition_m))
+
+
+def _climb_m(fit: RampFit, transition_m: float) -> float:
+    """The run ``fit`` needs to climb from its start to its crest and down to its end at
+    its slope target (vertical curves of ``transition_m`` included)."""
+    g = fit.spec.target_slope_pct / 100.0
+    za, zb = fit.start_pose[3], fit.end_pose[3]
+    top = max(fit.z_crest, za, zb)
+    return float(climb_distance(top - za, g, transition_m)
+                 + climb_distance(top - zb, g, transition_m))
+
+
+def _detours(spec: RampSpec, best: RampFit, obst, st, seed: int):
+    """Searches for a ramp whose fits all missed only by their slope
+    (:func:`_slope_short`: every restart started near the shortest path between its
+    windows, shorter than its climb needs), each started from detours about as long as its
+    climb at its slope target: two Dubins paths through a waypoint
+    (:func:`flyover.geometry.guess.detour_guesses`, :data:`DETOUR_PIECES` pieces), then
+    random shapes with one more piece (:data:`DETOUR_DRAWS` drawn); of each, the
+    :data:`DETOUR_STARTS` long enough with the fewest conflicts and lowest energy
+    (:func:`flyover.geometry.fit.ranked_starts`); each no longer than
+    :data:`DETOUR_LENGTH_RATIO` times its climb (the search wanders from 1.2-1.7 km starts
+    to 2.6-3 km for a 1 % climb of 1,190 m under the 2.5 of ``max_length_ratio``). Yields
+    the fits, the first that meets its targets ends it."""
+    at = replace(spec, z_crest=best.spec.z_crest,
+                 length_ratio=min(spec.length_ratio, DETOUR_LENGTH_RATIO))
+    need = _climb_m(best, st.fit.transition_m)
+    wide = replace(at, pieces=DETOUR_PIECES)
+    rows = ranked_starts(wide, obst, st.fit, detour_guesses(at, need), DETOUR_STARTS)
+    if len(rows):
+        yield fit_ramp(wide, obst, st.fit, seed=seed, init=rows)
+    more = replace(at, pieces=spec.pieces + 1)
+    b = np.array(bounds(more), float)
+    rng = np.random.default_rng(seed)
+    x = b[:, 0] + rng.random((DETOUR_DRAWS, len(b))) * (b[:, 1] - b[:, 0])
+    yield fit_ramp(more, obst, st.fit, seed=seed + 1,
+                   init=ranked_starts(more, obst, st.fit, x, DETOUR_STARTS))
 
 
 def _restart_rank(fit: RampFit) -> tuple[bool, int, bool, bool]:

@@ -64,7 +64,7 @@ from flyover.geometry.model import BezierPiece, ElevationPoly
 from flyover.geometry.straight import INF_REFERENCE_M, inf_met, radius_met
 
 __all__ = ["Rail", "FreeEnd", "Obstacles", "RampSpec", "FitSettings", "RampFit", "fit_ramp",
-           "ramp_objective", "conflicts_with", "recount"]
+           "ramp_objective", "ranked_starts", "conflicts_with", "recount"]
 
 log = logging.getLogger(__name__)
 
@@ -715,3 +715,18 @@ def conflicts_with(fit: RampFit, obstacles: Obstacles, settings: FitSettings) ->
         if n:
             out[name] = out.get(name, 0) + n
     return out
+
+
+def ranked_starts(spec: RampSpec, obstacles: Obstacles | None, settings: FitSettings,
+                  x: np.ndarray, k: int) -> np.ndarray:
+    """The ``k`` rows of ``x`` (decision vectors ``(n, D)`` of ``spec``) to start a search
+    from: those long enough to climb at the slope target first (no shortfall, within the
+    length bound), then the fewest conflicting samples, then the lowest energy."""
+    if len(x) == 0:
+        return x
+    f, _ = ramp_objective(spec, obstacles or Obstacles(), settings)
+    t = f.table(np.ascontiguousarray(np.asarray(x, float).T))
+    e = f.energy(t)
+    long_enough = (t[2] == 0.0) & (t[10] == 0.0)
+    order = np.lexsort((e, t[7], ~long_enough))
+    return np.asarray(x)[order[:k]]

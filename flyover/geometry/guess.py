@@ -29,7 +29,7 @@ import numpy as np
 from flyover.geometry.dubins import Word, words
 from flyover.geometry.fit import LEAD_MIN_M, RampSpec, bounds
 
-__all__ = ["DubinsGuess", "can_guess", "dubins_guess", "path_pieces"]
+__all__ = ["DubinsGuess", "can_guess", "detour_guesses", "dubins_guess", "path_pieces"]
 
 #: a path segment shorter than this (m) is no piece of its own
 MIN_SEGMENT_M = 5.0
@@ -244,3 +244,62 @@ def _vector(spec: RampSpec, sa: float, sb: float, word: Word,
               float(joints[k, 2] - (h0 + word.turn * f)), lam_in[k - 1], lam_out[k]]
     return np.array(x, float), np.array(bounds(sp), float)
 
+
+
+#: pieces of a detour start (:func:`detour_guesses`): an S-bend or a turn out and back in
+DETOUR_PIECES = 5
+#: a detour is at most this many times the length asked for
+DETOUR_SLACK = 1.4
+
+
+def detour_guesses(spec: RampSpec, length_m: float, pieces: int = DETOUR_PIECES,
+                   n: int = 9) -> np.ndarray:
+    """Decision vectors (``(k, D)``, ``pieces`` Bézier pieces, clipped to the bounds) of
+    detours between the windows of ``spec`` from ``length_m`` to :data:`DETOUR_SLACK` times
+    it long: two Dubins paths at the lane-centre radius target (the wider side's reference
+    radius) through a waypoint, the waypoints on an ``n`` × ``2n - 1`` grid around the
+    chord between the stations of the shortest path (from a quarter of it before to a
+    quarter past, a chord's length to either side) heading every 45°, the paths by how near
+    ``length_m`` they are (for a ramp that must climb further than its shortest path runs:
+    :func:`flyover.geometry.build._fit_with_levels`). Empty for a ramp with no guess."""
+    if not can_guess(spec):
+        return np.empty((0, len(bounds(replace(spec, pieces=pieces)))))
+    found = _best_word(spec, 24)
+    if found is None:
+        return np.empty((0, len(bounds(replace(spec, pieces=pieces)))))
+    sa, sb, _ = found
+    lead = LEAD_MIN_M if any(spec.leads()) else 0.0
+    pa, ha, _ = spec.start.at(np.array([sa]))
+    pb, hb, _ = spec.end.at(np.array([sb]))
+    h0, h1 = float(ha[0]), float(hb[0])
+    p0 = pa[0] + lead * np.array([np.cos(h0), np.sin(h0)])
+    p1 = pb[0] - lead * np.array([np.cos(h1), np.sin(h1)])
+    r = max(_reference_radius(spec, True), _reference_radius(spec, False))
+    raw = h1 - h0
+    tr = spec.turn_rad + ((raw - spec.turn_rad + np.pi) % (2 * np.pi) - np.pi)
+    c = p1 - p0
+    d = max(float(np.hypot(*c)), 1.0)
+    v = np.array([-c[1], c[0]]) / d
+    paths = []
+    for f in np.linspace(-0.25, 1.25, n):
+        for g in np.linspace(-1.0, 1.0, 2 * n - 1):
+            q = p0 + f * c + g * d * v
+            for k in range(8):
+                hq = k * np.pi / 4
+                near = None
+                for w1 in words(p0, h0, q, hq, r):
+                    for w2 in words(q, hq, p1, h1, r):
+                        w = Word(w1.word + w2.word, w1.lengths + w2.lengths, r)
+                        if abs(w.turn - tr) > 1e-6 or not \
+                                length_m <= w.length <= DETOUR_SLACK * length_m:
+                            continue
+                        if near is None or w.length < near.length:
+                            near = w
+                if near is not None:
+                    paths.append(near)
+    paths.sort(key=lambda w: w.length)
+    out = []
+    for w in paths:
+        x, b = _vector(spec, sa, sb, w, path_pieces(w, pieces))
+        out.append(np.clip(x, b[:, 0], b[:, 1]))
+    return np.array(out).reshape(len(out), len(bounds(replace(spec, pieces=pieces))))
