@@ -889,9 +889,9 @@ def _columbus_set(lanes, feats):
 def test_columbus_r12_window_takes_in_r11s_whole_run_beside_i270_north():
     """Drawn set 25 of benchmarks/geometry.py --osm (its seed): r11 (210 m) goes round
     the loop r6 and runs beside I-270 North near its end, at 1,759-1,836 m of 2,085 m;
-    r12's window on it was 40-85 % of r11 (rails.AttachmentWindows.ramp_rail), so only
+    r12's window on it was 40-85 % of r11 (rails.RampWindows.window), so only
     14 m of the run was left and r12 (inf) turned into it at 66 m. Now the window takes
-    in the whole run (AttachmentWindows.reach_run): r12 joins it straight."""
+    in the whole run (RampWindows.reach_run): r12 joins it straight."""
     from flyover.geometry.straight import inf_met  # noqa: PLC0415
 
     topo, lanes, feats = _columbus_set((5, 5, 5, 3), {

@@ -13,7 +13,7 @@ and the ramps already fitted:
    cannot meet its targets that way, it is fitted as any other ramp); a loop
    whose outer connector leaves a stub fitted before it is first fitted inside
    the fences that leave that connector room to go round it
-   (:meth:`flyover.geometry.rails.AttachmentWindows.fences`; if it cannot meet
+   (:meth:`flyover.geometry.loop_room.LoopRoom.fences`; if it cannot meet
    its targets so, as any other ramp); so is each branch of a T's terminal, inside
    the fence that keeps it off its sibling's side until the two are levels apart
    (:func:`flyover.geometry.terminals.terminal_fences`), and a ramp whose child
@@ -389,7 +389,7 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
         fit = held if held.ok and held.conflicts == 0 else None
     if fit is None and (fences or room):
         # a loop whose outer connector leaves a fitted stub keeps off where that one
-        # must turn round it (:meth:`AttachmentWindows.fences`), a branch of a T's
+        # must turn round it (:meth:`LoopRoom.fences`), a branch of a T's
         # terminal off its sibling's side (:func:`terminal_fences`), a ramp whose child
         # attaches on its road's side off that road's edge (:func:`child_room_fences`),
         # the first of a stub's children out of its fork (into its join) off the way its

@@ -393,7 +393,7 @@ def fixed_window_ramps(topology: Topology, moves: Movements | None = None) -> fr
     roads, each held by the road's end (a ramp straight on to the next expressway,
     :func:`flyover.geometry.chains.continuations`; an ``Out-M`` / ``In-M`` end, or a
     ``pos`` at 0 / 1 on a road that ends there), as
-    :meth:`flyover.geometry.rails.AttachmentWindows.road_rail` places them. Only DC's
+    :meth:`flyover.geometry.rails.RoadWindows.road_rail` places them. Only DC's
     ``r3`` / ``r4`` of the 11 designs and 14 OSM interchanges."""
     g = topology.graph
     moves = moves or _movements(topology)

@@ -2,7 +2,7 @@
 
 A stub with no end splits into its children at its free end, side by side (the one
 leaving on the left on the stub's left lanes, the one on the right on its right
-lanes, :meth:`flyover.geometry.rails.AttachmentWindows.ramp_rail`); a stub with no
+lanes, :meth:`flyover.geometry.rails.RampWindows.ramp_rail`); a stub with no
 start is formed where its children join, the same way round. The children are fitted
 one after the other, and the first knew nothing of the second: a turbine's left turn
 ``lB2``, fitted before its sibling right turn ``rB2``, swung right across ``rB2``'s

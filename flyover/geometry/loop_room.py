@@ -59,7 +59,7 @@ class LoopRoom:
         from the crossing (:attr:`flyover.geometry.fit.Obstacles.lines` rows without their
         height: the layout keeps them out at every height, as a keep-out loop). The loop's
         window there begins beyond it
-        (:meth:`flyover.geometry.rails.AttachmentWindows.road_rail`); its body may not reach
+        (:meth:`flyover.geometry.rails.RoadWindows.road_rail`); its body may not reach
         back. For a stub whose child goes round a fitted loop (:meth:`connector_fences`),
         where the stub must not go."""
         out = self.connector_fences(loop)

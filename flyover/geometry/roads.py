@@ -36,7 +36,7 @@ settings.
   one; it lies on the side where most ramp ends lie on the side their ramp turns to. Its
   roads record the junction (:attr:`RoadLine.junction`), the origin of their stations;
   the ramps between it and the line keep their room from it
-  (:meth:`flyover.geometry.rails.AttachmentWindows.crossing_s`); its ramps do not size the
+  (:meth:`flyover.geometry.rails.RoadWindows.crossing_s`); its ramps do not size the
   kept one's terminal.
 * A carriageway's reference line is its left (median) edge, ``median_m / 2``
   from the axis; where ramps leave or join a carriageway on its left (they run

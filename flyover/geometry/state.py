@@ -180,7 +180,8 @@ class LayoutState:
         fitted in ``r11``'s round), and so does the stub it leaves (joins), whose free end
         then keeps the room the connector needs to go round the fitted loop
         (:meth:`flyover.geometry.loop_room.LoopRoom.fences`: Columbus's ``r1``); on a
-        shared road their windows keep them apart (:meth:`AttachmentWindows.road_rail`)."""
+        shared road their windows keep them apart
+        (:meth:`flyover.geometry.rails.RoadWindows.road_rail`)."""
         done: set[str] = set()
         out = []
         todo = list(self.topo.ramps)
