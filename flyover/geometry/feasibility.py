@@ -68,7 +68,7 @@ its loop can go round it only by an S-bend or a corner that no real one has, and
 fit often takes it over or under the loop instead (a bridge the design does not have).
 So the connector's radius must exceed its loop's by the room between their centre
 lines (:attr:`RoundLoop.margin_m`: the connector's width, half the loop's and 1 m, as
-the layout keeps them apart, :meth:`flyover.geometry.rails.Rails.round_loop`); every
+the layout keeps them apart, :meth:`flyover.geometry.loop_room.LoopRoom.round_loop`); every
 (connector radius, loop radius) that does not is forbidden (:func:`round_loops`;
 ``inf`` counts as ``inf_reference_m``, the radius it is built with). The pairs are
 read from the topology and the road layout, not from a design's name, so an OSM

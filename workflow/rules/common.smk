@@ -244,7 +244,7 @@ def class_tables(stage):
 #     beside_road; the catalog has no stub splitting off a stub: geometry_bytes unchanged);
 #     and a ramp running beside the road before a straight-on child joins reaches
 #     its road's height first (RampSpec.end_z_first) and the child joins
-#     it within that run (rails.AttachmentWindows.beside_part): Columbus's r11 and r12
+#     it within that run (rails.RampWindows.beside_part): Columbus's r11 and r12
 # 40: a connector between two stubs' free ends keeps off, first, where a loop fitted after
 #     it leaves its road (state.LayoutState.loop_room; Columbus's r2 and the loop r5 at
 #     I-70 East); a fenced miss is kept over an unfenced miss that ranks no better;
@@ -258,7 +258,7 @@ def class_tables(stage):
 #     the parent's mean height (RampSpecs.need_m; a stub's free end keeps its mean):
 #     Columbus's r7 onto r3's plateau; of the catalog, trumpet changes (geometry_bytes 3:
 #     trumpet 1 and 2); and a straight-on child's window on its parent takes in the
-#     parent's whole run beside its road (rails.AttachmentWindows.reach_run): Columbus's
+#     parent's whole run beside its road (rails.RampWindows.reach_run): Columbus's
 #     r12 on r11 (no catalog design has a straight-on child); a connector keeping its
 #     run beside its road for a straight-on child is lifted and restarted only in the
 #     slot twice as wide to the run's end (and on the plain spec); in the other slots a
