@@ -968,3 +968,38 @@ def test_columbus_r2_climbing_further_than_its_shortest_path_detours_for_its_cli
     assert r2.first_try_ok and r2.fit.conflicts == 0
     assert r2.fit.max_slope_pct == pytest.approx(1.0, abs=0.2)
     assert 1_150.0 < r2.fit.length_m <= r2.fit.max_length_m <= 2.0 * 1_190.0 + 80.0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+@pytest.mark.parametrize("sample,seed,lanes,feats", [
+    (17, 2811584545, (5, 4, 3, 3), {
+        "r1": (150.0, 4.0), "r10": (280.0, 2.0), "r11": (210.0, 5.0), "r12": (math.inf, 5.0),
+        "r13": (280.0, 0.0), "r14": (150.0, 2.0), "r2": (100.0, 4.0), "r3": (40.0, 1.0),
+        "r4": (150.0, 1.0), "r5": (40.0, 4.0), "r6": (60.0, 5.0), "r7": (210.0, 2.0),
+        "r8": (math.inf, 3.0), "r9": (60.0, 3.0)}),
+    (21, 1708889815, (4, 5, 4, 5), {
+        "r1": (60.0, 5.0), "r10": (150.0, 4.0), "r11": (60.0, 2.0), "r12": (math.inf, 2.0),
+        "r13": (60.0, 0.0), "r14": (100.0, 5.0), "r2": (100.0, 2.0), "r3": (40.0, 2.0),
+        "r4": (60.0, 4.0), "r5": (40.0, 3.0), "r6": (40.0, 3.0), "r7": (40.0, 5.0),
+        "r8": (100.0, 5.0), "r9": (30.0, 4.0)}),
+])
+def test_columbus_r11s_run_moves_along_i270_north_for_r12_that_cannot_come_round(
+        sample, seed, lanes, feats):
+    """Drawn sets 17 and 21 of benchmarks/geometry.py --osm (their seeds): r13 ends 3.7°
+    and 12.6° off I-270 North toward it (set 21: 10 m off its edge) and r11 still turns
+    in its run (98 -> 94° on set 17), so r12 (inf), 240-630 m from r13's end to the run,
+    swung away and back to come round to r11's heading: radius 226-233 m and 57 m, and
+    missed its first try (set 21 recorded infeasible). Now r11 is fitted again with its
+    run half, then all of r12's 250 m farther along (build._moved_run) and r12 then joins
+    it straight."""
+    from flyover.geometry.straight import inf_met  # noqa: PLC0415
+
+    topo, lanes, feats = _columbus_set(lanes, feats)
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=sample,
+                           seed=seed)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r12"].first_try_ok and out["r11"].first_try_ok
+    r12 = out["r12"].fit
+    assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
+    assert r12.spec.end.parent == "r11" and out["r11"].fit.ok

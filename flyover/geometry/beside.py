@@ -148,12 +148,15 @@ def beside_run(moves: Movements, width: Mapping[str, float], st: LayoutSettings,
     in). It begins its radius target beyond its window's start (the window leaves room
     to come in at 45°: :meth:`flyover.geometry.loop_room.LoopRoom.round_loop`; ``r11``
     fitted into a run beginning ``r sin 45°`` beyond it was still turning there) and runs
-    ``2 × gap_m`` (the child's taper and the ramp's own); ``None`` for any other ramp."""
+    ``2 × gap_m`` (the child's taper and the ramp's own); farther along by the ramp's
+    :attr:`flyover.geometry.fitted.FittedRamps.run_shift` once moved for a child that
+    missed its targets there (``build._moved_run``); ``None`` for any other ramp."""
     ends_ = ends(moves.topo, spec.id)
     if spec.end is None or ends_[1] is None or ends_[1][1] is not Label.IN_R \
             or ends_[1][0] not in moves.roads or not _straight_kids(moves, fitted, spec.id):
         return None
-    lo = spec.end.lo + built_radius(spec.target_radius_m, st.fit.inf_reference_m)
+    lo = spec.end.lo + built_radius(spec.target_radius_m, st.fit.inf_reference_m) \
+        + fitted.run_shift.get(spec.id, 0.0)
     return lo, lo + 2.0 * st.gap_m
 
 

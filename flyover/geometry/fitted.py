@@ -50,6 +50,10 @@ class FittedRamps:
         self.fits: dict[str, RampFit] = {}
         self.stations: dict[str, dict] = {}
         self.attached: dict[str, list[tuple[float, float, float, str, float]]] = {}
+        #: ramp → how far (m) along its road its run beside the road lies beyond where
+        #: :func:`flyover.geometry.beside.beside_run` first puts it (moved for a child
+        #: that missed its targets joining it there: ``build._moved_run``)
+        self.run_shift: dict[str, float] = {}
         self.bands = road_bands(self.roads, st)
 
     def obstacles(self, keep_out: frozenset[str] = frozenset(),

@@ -271,7 +271,11 @@ def class_tables(stage):
 #     paths through a waypoint, then random shapes long enough), no longer than twice its
 #     climb; kept only if it meets its targets (Columbus's r2 at 1 %; catalog bytes
 #     unchanged)
-GEOMETRY_VERSION = 41
+# 42: a child joining its parent straight on from a stub's free end that misses its
+#     targets has its parent refitted with its run beside its road half, then all of the
+#     child's radius farther along, kept only if both then meet their targets
+#     (build._moved_run: Columbus's r12 into r11)
+GEOMETRY_VERSION = 42
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
