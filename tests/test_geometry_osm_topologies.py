@@ -758,33 +758,35 @@ def test_columbus_r12_joins_r11_in_its_run_beside_i270_north_at_its_height(sampl
     assert out["r11"].fit.end_pose[3] == pytest.approx(0.0, abs=1e-6)
 
 
+@pytest.fixture(scope="module")
+def columbus_set_26():
+    """Drawn set 26 of benchmarks/geometry.py --osm, built at its seed: ramp -> outcome."""
+    topo, lanes, feats = _columbus_set((3, 4, 4, 5), {
+        "r1": (100.0, 4.0), "r10": (30.0, 5.0), "r11": (150.0, 5.0), "r12": (math.inf, 5.0),
+        "r13": (60.0, 0.0), "r14": (60.0, 1.0), "r2": (210.0, 1.0), "r3": (60.0, 4.0),
+        "r4": (210.0, 2.0), "r5": (40.0, 3.0), "r6": (40.0, 3.0), "r7": (210.0, 2.0),
+        "r8": (100.0, 5.0), "r9": (60.0, 5.0)})
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=26,
+                           seed=4223599476)
+    return {o.ramp: o for o in ic.outcomes}
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
-def test_columbus_r2_leaves_the_loop_r5_room_where_it_leaves_i70_east():
+def test_columbus_r2_leaves_the_loop_r5_room_where_it_leaves_i70_east(columbus_set_26):
     """Drawn set 26 of benchmarks/geometry.py --osm (its seed): r2 (210 m / 1 %, between
     the free ends of r8 and r14, fitted before the loop r5) climbed beside I-70 East, and
     r5 (40 m / 3 %, from I-70 East at 6.5 m down to r13) met it there at its level (4
     samples) and missed its first try. Now r2 keeps off where r5 leaves I-70 East
     (LayoutState.loop_room) and both are first try with no conflict."""
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
-
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (3, 4, 4, 5)))
-    feats = {r: RampFeatures(*v) for r, v in {
-        "r1": (100.0, 4.0), "r10": (30.0, 5.0), "r11": (150.0, 5.0), "r12": (math.inf, 5.0),
-        "r13": (60.0, 0.0), "r14": (60.0, 1.0), "r2": (210.0, 1.0), "r3": (60.0, 4.0),
-        "r4": (210.0, 2.0), "r5": (40.0, 3.0), "r6": (40.0, 3.0), "r7": (210.0, 2.0),
-        "r8": (100.0, 5.0), "r9": (60.0, 5.0)}.items()}
-    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=26,
-                           seed=4223599476)
-    out = {o.ramp: o for o in ic.outcomes}
+    out = columbus_set_26
     for r in ("r2", "r5"):
         assert out[r].first_try_ok and out[r].fit.conflicts == 0, r
 
 
 @pytest.mark.slow
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
-def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau():
+def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau(columbus_set_26):
     """Drawn set 26 of benchmarks/geometry.py --osm (its seed): r7 (210 m / 2 %) leaves
     I-70 East at 6.5 m and joins the flyover r3 where r3 is level: on its 19.5 m plateau.
     Its start window on I-70 East reaches no farther back than 1.5 x what it needs beyond
@@ -792,18 +794,7 @@ def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau():
     (about 13 m): 702 m back, and r7 turned at 171.5 m (2.19 %) and missed its first
     try. Now the climb is read at r3's height in r7's window: 13 m at 2 % with a 40 m
     vertical curve is 690 m, and 40 m tapers: 34.5 + 1.5 x 770 = 1,189.5 m back."""
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
-
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (3, 4, 4, 5)))
-    feats = {r: RampFeatures(*v) for r, v in {
-        "r1": (100.0, 4.0), "r10": (30.0, 5.0), "r11": (150.0, 5.0), "r12": (math.inf, 5.0),
-        "r13": (60.0, 0.0), "r14": (60.0, 1.0), "r2": (210.0, 1.0), "r3": (60.0, 4.0),
-        "r4": (210.0, 2.0), "r5": (40.0, 3.0), "r6": (40.0, 3.0), "r7": (210.0, 2.0),
-        "r8": (100.0, 5.0), "r9": (60.0, 5.0)}.items()}
-    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=26,
-                           seed=4223599476)
-    out = {o.ramp: o for o in ic.outcomes}
+    out = columbus_set_26
     r7 = out["r7"].fit
     assert out["r7"].first_try_ok and r7.conflicts == 0
     assert r7.end_pose[3] == pytest.approx(19.5, abs=1e-6)  # on r3's plateau
