@@ -740,12 +740,9 @@ def test_columbus_r12_joins_r11_in_its_run_beside_i270_north_at_its_height(sampl
     LayoutState.loop_room): with it r2 takes another shape on both sets, and set 2
     misses r12, set 9 r3 and r7 first try (a reshuffle downstream, not r12's window)."""
     from flyover.geometry.straight import inf_met  # noqa: PLC0415
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
     monkeypatch.setattr(LayoutState, "loop_room", lambda self, ramp: ())
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes))
-    feats = {r: RampFeatures(*v) for r, v in feats.items()}
+    topo, lanes, feats = _columbus_set(lanes, feats)
     ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=sample,
                            seed=seed)
     out = {o.ramp: o for o in ic.outcomes}
@@ -823,11 +820,8 @@ def test_columbus_r11_at_60m_keeps_its_run_beside_i270_north_for_r12(sample, see
     (beside.run_slacks) before it drops the child's room: it keeps its run, and r12
     joins it there straight."""
     from flyover.geometry.straight import inf_met  # noqa: PLC0415
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes))
-    feats = {r: RampFeatures(*v) for r, v in feats.items()}
+    topo, lanes, feats = _columbus_set(lanes, feats)
     ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=sample,
                            seed=seed)
     out = {o.ramp: o for o in ic.outcomes}
