@@ -843,18 +843,12 @@ def test_columbus_r11_runs_straight_beside_i270_north_where_r12_joins():
     1,800-2,000 m east and back and met r11. Now r11 is first held off the edge over the
     whole run (beside.run_slacks): it runs straight there and r12 joins it first try."""
     from flyover.geometry.straight import inf_met  # noqa: PLC0415
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (3, 5, 5, 4)))
-    feats = {r: RampFeatures(*v) for r, v in {
+    out = _columbus_outcomes((3, 5, 5, 4), {
         "r1": (150.0, 4.0), "r10": (210.0, 4.0), "r11": (100.0, 1.0), "r12": (math.inf, 2.0),
         "r13": (math.inf, 0.0), "r14": (210.0, 2.0), "r2": (150.0, 5.0), "r3": (150.0, 4.0),
         "r4": (60.0, 5.0), "r5": (30.0, 2.0), "r6": (60.0, 3.0), "r7": (40.0, 2.0),
-        "r8": (210.0, 2.0), "r9": (210.0, 2.0)}.items()}
-    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=16,
-                           seed=3499249847)
-    out = {o.ramp: o for o in ic.outcomes}
+        "r8": (210.0, 2.0), "r9": (210.0, 2.0)}, sample=16, seed=3499249847)
     assert out["r11"].first_try_ok and out["r12"].first_try_ok
     r12 = out["r12"].fit
     assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
@@ -867,6 +861,15 @@ def _columbus_set(lanes, feats):
     topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
     return (topo, dict(zip(("I270N", "I270S", "I70E", "I70W"), lanes)),
             {r: RampFeatures(*v) for r, v in feats.items()})
+
+
+def _columbus_outcomes(lanes, feats, sample, seed):
+    """Columbus built with ``lanes`` (I270N, I270S, I70E, I70W) and ``feats`` (ramp ->
+    (radius, slope)) at a drawn set's sample and seed: ramp -> outcome."""
+    topo, lanes, feats = _columbus_set(lanes, feats)
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=sample,
+                           seed=seed)
+    return {o.ramp: o for o in ic.outcomes}
 
 
 @pytest.mark.slow
@@ -905,7 +908,6 @@ def test_columbus_r11_is_not_restarted_in_the_narrow_slot_it_grazes(monkeypatch)
     two slots over the run's first gap_m (sets 14, 18): only the wide slot to the run's
     end (sets 2, 8, 16, 30) and the plain spec keep them (build._round_fit)."""
     import flyover.geometry.build as build  # noqa: PLC0415
-    from flyover.osm import read_osm_topologies  # noqa: PLC0415
 
     calls = []
 
@@ -914,16 +916,11 @@ def test_columbus_r11_is_not_restarted_in_the_narrow_slot_it_grazes(monkeypatch)
         return _fit_with_levels(b, spec, seed, keep_out, *args, **kw)
 
     monkeypatch.setattr(build, "_fit_with_levels", counted)
-    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
-    lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (5, 4, 5, 5)))
-    feats = {r: RampFeatures(*v) for r, v in {
+    out = _columbus_outcomes((5, 4, 5, 5), {
         "r1": (math.inf, 1.0), "r10": (150.0, 4.0), "r11": (280.0, 2.0), "r12": (math.inf, 1.0),
         "r13": (40.0, 0.0), "r14": (math.inf, 2.0), "r2": (100.0, 4.0), "r3": (280.0, 2.0),
         "r4": (210.0, 5.0), "r5": (100.0, 1.0), "r6": (210.0, 1.0), "r7": (150.0, 3.0),
-        "r8": (30.0, 1.0), "r9": (30.0, 1.0)}.items()}
-    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=13,
-                           seed=2700649528)
-    out = {o.ramp: o for o in ic.outcomes}
+        "r8": (30.0, 1.0), "r9": (30.0, 1.0)}, sample=13, seed=2700649528)
     assert out["r11"].first_try_ok and out["r12"].first_try_ok
     assert out["r11"].fit.spec.end_z_first  # kept its run for r12
     assert ("r11", True) not in calls  # no lifts nor restarts round r6
