@@ -452,12 +452,10 @@ def _moved_run(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rsee
     if not joins_straight_on(b.moves, b.fitted, ramp, b.g.edges[(ramp, parent)]["label"]):
         return fit
     old = b.fits[parent]
-    if beside_run(b.moves, b.width, b.st, old.spec, b.fitted) is None or any(
-            r is not None and r.parent == parent
-            for f in b.fits.values() for r in (f.spec.start, f.spec.end)):
+    if beside_run(b.moves, b.width, b.st, old.spec, b.fitted) is None \
+            or parent in _attached_to(b):
         return fit
-    kept = (dict(b.fitted.fits), dict(b.fitted.stations),
-            {k: list(v) for k, v in b.fitted.attached.items()})
+    kept = b.fitted.saved()
     radius = built_radius(feat.radius_m, b.st.fit.inf_reference_m)  # the child's
     mine = _Spent()
     for n, times in enumerate(MOVED_RUN_RADII):
@@ -480,9 +478,7 @@ def _moved_run(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rsee
                 outcomes[i] = replace(o, fit=new, evaluations=o.evaluations + mine.evals,
                                       seconds=o.seconds + mine.secs)
                 return again
-        for now, then in zip((b.fitted.fits, b.fitted.stations, b.fitted.attached), kept):
-            now.clear()  # as they were, in their order
-            now.update(then)
+        b.fitted.restore(kept)  # as they were, in their order
     spent.evals, spent.secs = spent.evals + mine.evals, spent.secs + mine.secs
     del b.fitted.run_shift[parent]
     return fit
@@ -584,7 +580,7 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
     st = b.st
     evals, secs = 0, 0.0
     parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
-    used = {r.parent for f in b.fits.values() for r in (f.spec.start, f.spec.end) if r is not None}
+    used = _attached_to(b)
     met = conflicts_with(fit, b.obstacles(), st.fit)
     movable = [m for m in met if m in b.fits and m not in parents and m not in used]
     if not movable:
@@ -611,6 +607,12 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
         evals, secs = evals + e, secs + t
         fit = min([fit, again], key=lambda f: (f.conflicts, not f.ok))
     return fit, evals, secs
+
+
+def _attached_to(b: LayoutState) -> set[str]:
+    """The roads and ramps a fitted ramp is attached to."""
+    return {r.parent for f in b.fits.values() for r in (f.spec.start, f.spec.end)
+            if r is not None}
 
 
 def _windows(spec: RampSpec) -> tuple:

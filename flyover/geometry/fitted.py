@@ -111,6 +111,21 @@ class FittedRamps:
         for parent, items in self.attached.items():
             self.attached[parent] = [a for a in items if a[3] != ramp]
 
+    def saved(self) -> tuple:
+        """The fits, stations and attachments as they are now, for :meth:`restore`."""
+        return (dict(self.fits), dict(self.stations),
+                {k: list(v) for k, v in self.attached.items()})
+
+    def restore(self, saved: tuple) -> None:
+        """Put back what :meth:`saved` returned, in its order (a ramp recorded again with
+        :meth:`record` would be attached last, and later ramps read attachments in order)."""
+        fits, stations, attached = saved
+        for now, then in ((self.fits, fits), (self.stations, stations)):
+            now.clear()
+            now.update(then)
+        self.attached.clear()
+        self.attached.update({k: list(v) for k, v in attached.items()})
+
     def record(self, ramp: str, fit: RampFit) -> None:
         """Keep a fitted ramp: later ramps attach to its stations and avoid its lane."""
         self.fits[ramp] = fit

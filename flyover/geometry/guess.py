@@ -245,7 +245,6 @@ def _vector(spec: RampSpec, sa: float, sb: float, word: Word,
     return np.array(x, float), np.array(bounds(sp), float)
 
 
-
 #: pieces of a detour start (:func:`detour_guesses`): an S-bend or a turn out and back in
 DETOUR_PIECES = 5
 #: a detour is at most this many times the length asked for
@@ -262,11 +261,10 @@ def detour_guesses(spec: RampSpec, length_m: float, pieces: int = DETOUR_PIECES,
     quarter past, a chord's length to either side) heading every 45°, the paths by how near
     ``length_m`` they are (for a ramp that must climb further than its shortest path runs:
     :func:`flyover.geometry.build._fit_with_levels`). Empty for a ramp with no guess."""
-    if not can_guess(spec):
-        return np.empty((0, len(bounds(replace(spec, pieces=pieces)))))
-    found = _best_word(spec, 24)
+    dim = len(bounds(replace(spec, pieces=pieces)))
+    found = _best_word(spec, 24) if can_guess(spec) else None
     if found is None:
-        return np.empty((0, len(bounds(replace(spec, pieces=pieces)))))
+        return np.empty((0, dim))
     sa, sb, _ = found
     lead = LEAD_MIN_M if any(spec.leads()) else 0.0
     pa, ha, _ = spec.start.at(np.array([sa]))
@@ -302,4 +300,4 @@ def detour_guesses(spec: RampSpec, length_m: float, pieces: int = DETOUR_PIECES,
     for w in paths:
         x, b = _vector(spec, sa, sb, w, path_pieces(w, pieces))
         out.append(np.clip(x, b[:, 0], b[:, 1]))
-    return np.array(out).reshape(len(out), len(bounds(replace(spec, pieces=pieces))))
+    return np.array(out).reshape(len(out), dim)
