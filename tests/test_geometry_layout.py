@@ -1085,3 +1085,21 @@ def test_real_turns_decide_the_orientation_a_cloverleaf_ties_on():
         moves = Movements(real, layout_roads(real, {}, st))
         assert all(moves.movement(r) * first[r] * expect > 0 for r in topo.ramps)
         assert {r for r in topo.ramps if moves.is_loop(r)} == (loops if expect > 0 else set())
+
+
+def test_a_left_turn_leaving_early_is_a_loop_where_its_real_one_turns_right_round():
+    """A left movement leaving its road on the right before 0.4 along it is a
+    semi-directional flyover, unless the real ramp (``turn_deg``) turns right by more than
+    180 deg: then it is a loop (Bangor's r7, leaving at 0.35, turns -267 deg)."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    topo = catalog_topologies()["cloverleaf"]
+    st = LayoutSettings()
+    for turn, loop in ((None, False), (-265.0, True)):
+        g = topo.graph.copy()
+        g.edges["A1", "lA1"]["pos"] = 0.3
+        if turn is not None:
+            g.nodes["lA1"]["turn_deg"] = turn
+        early = Topology(topo.name, g, topo.source, topo.attrs)
+        assert Movements(early, layout_roads(early, {}, st)).is_loop("lA1") is loop

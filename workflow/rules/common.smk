@@ -278,7 +278,10 @@ def class_tables(stage):
 # 43: the road layout lays each ramp between two roads turning to the side its real one
 #     turns to (the OSM reader's turn_deg), before the turn-side score (roads.layout_roads:
 #     the Bangor cloverleaf was laid mirrored, its outer connectors as left flyovers;
-#     Sydney, Portland Marquam and Boston I-93/US 1 change too; catalog bytes unchanged)
+#     Sydney, Portland Marquam and Boston I-93/US 1 change too); a ramp whose real one turns
+#     right by over 180 deg is a loop even leaving before 0.4 (Bangor's r7); an outer
+#     connector on a road its loop shares is fitted after the loop (state.order: Bangor's
+#     r1-r4 came first by id); catalog bytes unchanged
 GEOMETRY_VERSION = 43
 
 
