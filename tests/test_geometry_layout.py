@@ -1059,3 +1059,47 @@ def test_an_upper_left_turn_of_a_stack_clears_the_lower_one_at_its_first_try(mon
     assert out["lA2"].fit.z_crest == 13.0 and out["lB2"].fit.z_crest == 19.5
     assert [r for r, o in out.items() if not o.first_try_ok] == []
     assert not same_level_conflicts(ic.geometry)
+
+
+def test_real_turns_decide_the_orientation_a_cloverleaf_ties_on():
+    """A cloverleaf's ends are all on the right: both orientations of its second road
+    score the same turn sides, so the first is taken. Ramps carrying their real turn
+    (``turn_deg``, as the OSM reader measures it) are laid turning as they really do: the
+    catalog cloverleaf with the real turns of its mirror image is laid out mirrored, its
+    loops as right-turn connectors; without them nothing changes."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    topo = catalog_topologies()["cloverleaf"]
+    st = LayoutSettings()
+    moves = Movements(topo, layout_roads(topo, {}, st))
+    first = {r: moves.movement(r) for r in topo.ramps}
+    loops = {r for r in topo.ramps if moves.is_loop(r)}
+    assert loops == {"lA1", "lA2", "lB1", "lB2"}
+    for turns, expect in (({r: (-270.0 if r in loops else -90.0) for r in topo.ramps}, 1),
+                          ({r: (270.0 if r in loops else 90.0) for r in topo.ramps}, -1)):
+        g = topo.graph.copy()
+        for r, t in turns.items():
+            g.nodes[r]["turn_deg"] = t
+        real = Topology(topo.name, g, topo.source, topo.attrs)
+        moves = Movements(real, layout_roads(real, {}, st))
+        assert all(moves.movement(r) * first[r] * expect > 0 for r in topo.ramps)
+        assert {r for r in topo.ramps if moves.is_loop(r)} == (loops if expect > 0 else set())
+
+
+def test_a_left_turn_leaving_early_is_a_loop_where_its_real_one_turns_right_round():
+    """A left movement leaving its road on the right before 0.4 along it is a
+    semi-directional flyover, unless the real ramp (``turn_deg``) turns right by more than
+    180 deg: then it is a loop (Bangor's r7, leaving at 0.35, turns -267 deg)."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+
+    topo = catalog_topologies()["cloverleaf"]
+    st = LayoutSettings()
+    for turn, loop in ((None, False), (-265.0, True)):
+        g = topo.graph.copy()
+        g.edges["A1", "lA1"]["pos"] = 0.3
+        if turn is not None:
+            g.nodes["lA1"]["turn_deg"] = turn
+        early = Topology(topo.name, g, topo.source, topo.attrs)
+        assert Movements(early, layout_roads(early, {}, st)).is_loop("lA1") is loop

@@ -985,3 +985,61 @@ def test_columbus_r11s_run_moves_along_i270_north_for_r12_that_cannot_come_round
     r12 = out["r12"].fit
     assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
     assert r12.spec.end.parent == "r11" and out["r11"].fit.ok
+
+
+BANGOR = OSM_DIR / "06_us_me_bangor_i95_i395.osm"
+
+
+@pytest.mark.skipif(not BANGOR.is_file(), reason=f"no real OSM extract at {BANGOR}")
+def test_the_bangor_cloverleaf_is_laid_out_as_it_turns_not_mirrored(tmp_path):
+    """Bangor (file 06) is a cloverleaf: every ramp leaves and joins on the right, so both
+    orientations of I-95 score the same turn sides, and the first one was the mirror of
+    the real interchange: r1-r4 (real outer connectors, turning right by 39-139 deg between
+    the roads) turned left and, leaving before the crossing, were 1.4-3 km flyovers, and
+    r5-r8 (the real loops, -237 to -268 deg) were right turns; 16 of 128 first tries missed.
+    The reader's ``turn_deg`` of each ramp decides the tie, also read back from the
+    GraphML the workflow writes, and makes r7 a loop though it leaves at 0.35 (a left turn
+    leaving before 0.4 is a flyover where the real turn is unknown). Each loop is fitted
+    before the outer connector that goes round it (by id the connectors came first and
+    then went over or under their loops)."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+    from flyover.topology.io import read_graphml, write_graphml  # noqa: PLC0415
+
+    write_graphml(next(t for t in read_osm_topologies(BANGOR) if t.ramps), tmp_path / "b.graphml")
+    topo = read_graphml(tmp_path / "b.graphml")
+    turn = {r: topo.graph.nodes[r]["turn_deg"] for r in topo.ramps}
+    assert all(-100 < turn[r] < -40 for r in ("r1", "r2", "r3", "r4")), turn
+    assert all(-280 < turn[r] < -230 for r in ("r5", "r6", "r7", "r8")), turn
+    moves = Movements(topo, layout_roads(topo, {}, LayoutSettings()))
+    assert all(moves.movement(r) < 0 for r in ("r1", "r2", "r3", "r4"))  # right turns
+    assert all(moves.movement(r) > 0 for r in ("r5", "r6", "r7", "r8"))
+    assert {r for r in topo.ramps if moves.is_loop(r)} == {"r5", "r6", "r7", "r8"}
+    pairs = {(p.connector, p.loop) for p in round_loops(topo)}
+    assert pairs == {("r1", "r6"), ("r2", "r7"), ("r3", "r8"), ("r4", "r5")}
+    order = LayoutState(topo, {}, {}, LayoutSettings(), 0).order()
+    assert all(order.index(loop) < order.index(c) for c, loop in pairs), order
+
+
+@pytest.mark.parametrize("path", sorted(OSM_DIR.glob("*.osm")), ids=lambda p: p.stem[:2])
+def test_every_real_interchange_is_laid_out_turning_as_its_ramps_really_turn(path):
+    """Each ramp between two roads with a real turn of 20-160 deg either way (its
+    ``turn_deg`` wrapped) turns to that side in the layout, on every shared extract (before,
+    Bangor, Sydney, Portland Marquam and Boston I-93 / US 1 were laid out mirrored)."""
+    from flyover.geometry.chains import ends, wrap  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    for topo in (t for t in read_osm_topologies(path) if t.ramps):
+        roads = layout_roads(topo, {}, LayoutSettings())
+        for ramp in topo.ramps:
+            start, end = ends(topo, ramp)
+            if start is None or end is None or not {start[0], end[0]} <= roads.keys() \
+                    or start[0] == end[0]:
+                continue
+            real = wrap(math.radians(topo.graph.nodes[ramp]["turn_deg"]))
+            laid = wrap(roads[end[0]].heading - roads[start[0]].heading)
+            if math.radians(20) < abs(real) < math.radians(160):
+                assert real * laid > 0, (topo.name, ramp, math.degrees(real), math.degrees(laid))

@@ -18,7 +18,7 @@ import pytest
 from flyover.cli import main
 from flyover.errors import InputFormatError
 from flyover.osm import OsmOptions, read_motorway_network, read_osm_topologies
-from flyover.osm.geom import LocalProjection, min_radius
+from flyover.osm.geom import LocalProjection, min_radius, signed_turn_deg, turn_deg
 from flyover.osm.plot import plot_osm_topology
 from flyover.topology import Connection, Label, Ramp, Road, Topology, class_id
 from flyover.topology.catalog import catalog_topologies
@@ -208,6 +208,35 @@ def test_ramp_geometry_is_measured(tmp_path):
     assert attrs["grade_pct"] == pytest.approx(600 / attrs["length_m"], rel=0.01)
     assert attrs["lanes"] == 1
     assert {d.get("lanes") for _, d in t.graph.nodes(data=True) if d["kind"].value == "road"} == {2}
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_a_cloverleaf_drawn_in_osm_is_laid_out_turning_as_drawn(tmp_path, k):
+    """Each ramp carries its real turn (``turn_deg``: heading change, left positive, a
+    loop about -270 deg), and the layout keeps it: drawn turned by any quarter, the outer
+    connectors turn right and the loops are loops (before, turned by one or three
+    quarters it was laid out mirrored, its loops as right turns)."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+    from flyover.geometry.roads import layout_roads  # noqa: PLC0415
+    from flyover.geometry.settings import LayoutSettings  # noqa: PLC0415
+
+    ways = [dict(w, points=rot(w["points"], k)) for w in cross_roads()] + \
+        [way(rot(OUTER, j + k)) for j in range(4)] + [way(rot(LOOP, j + k)) for j in range(4)]
+    t = only(write_osm(tmp_path / "clover.osm", ways))
+    turn = {r: t.graph.nodes[r]["turn_deg"] for r in t.ramps}
+    outer = {r for r, x in turn.items() if -90 < x < -45}  # OUTER: 79 -> 11 deg
+    assert len(outer) == 4 and all(-240 < x < -210 for r, x in turn.items() if r not in outer)
+    moves = Movements(t, layout_roads(t, {}, LayoutSettings()))
+    assert all(moves.movement(r) < 0 for r in outer)
+    assert {r for r in t.ramps if moves.is_loop(r)} == set(t.ramps) - outer
+
+
+def test_signed_turn_of_a_polyline_is_left_positive_and_not_wrapped():
+    square = [(0, 0), (10, 0), (10, 10), (0, 10), (0, 0), (10, 0)]  # left round a square
+    assert signed_turn_deg(square) == pytest.approx(360.0)
+    assert signed_turn_deg([(x, -y) for x, y in square]) == pytest.approx(-360.0)
+    assert turn_deg(square) == pytest.approx(360.0)
+    assert signed_turn_deg([(0, 0), (0.2, 0), (50, 0)]) == 0.0
 
 
 def test_min_radius_of_a_straight_line_is_infinite():

@@ -6,7 +6,9 @@ Decides the *kind* of a ramp; reads the topology and the road layout (headings).
 
 * The movement of a ramp is that of the roads its chain connects.
 * A loop is a left movement that leaves its parent on the right (``Out-R``),
-  unless its exit ``pos`` is below 0.4 (then it is a semi-directional flyover);
+  unless its exit ``pos`` is below 0.4 (then it is a semi-directional flyover) and the
+  real ramp, where the topology has it (``turn_deg``, measured by the OSM reader), turns
+  right by no more than 180° (Bangor's ``r7`` leaves at 0.35 and really turns -267°);
   it turns 270° to the right. It is decided from the roads the chain connects,
   not from the parents' local headings: a collector-distributor road with a
   small radius wiggles.
@@ -174,7 +176,7 @@ class Movements:
         if raw is None or not (abs(raw - np.pi / 2) < 0.2):
             return False
         pos = self.g.edges[start[0], ramp].get("pos")
-        return pos is None or pos >= 0.4
+        return pos is None or pos >= 0.4 or self.g.nodes[ramp].get("turn_deg", 0.0) < -180.0
 
     def is_stub(self, ramp: str) -> bool:
         start, end = ends(self.topo, ramp)

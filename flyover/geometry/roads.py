@@ -6,8 +6,12 @@ settings.
 
 * Expressways are straight lines through the centre: the first through
   expressway runs north–south (carriageway 1 northbound), the second east–west;
-  its direction is chosen so that as many ramps as possible leave and join on
-  the side they turn to (right exits turning right). Further expressways are
+  its direction is chosen so that the ramps between two roads turn as the real ones
+  do, where the topology comes with their real turns (``turn_deg``, measured by the OSM
+  reader; a cloverleaf's ends are all on the right, so nothing else tells its two
+  orientations apart: Bangor's was laid out mirrored), then so that as many ramps as
+  possible leave and join on the side they turn to (right exits turning right); catalog
+  specs and GraphML without coordinates carry no turns. Further expressways are
   placed at 45° steps, each where its legs are farthest from those placed
   (a 5-leg interchange's half lines spread round the centre). An expressway
   that ends here (``Out-M``/``In-M``, a T) is a half line: its carriageways
@@ -64,6 +68,9 @@ __all__ = ["RoadLine", "layout_roads", "road_bands", "tee_junctions", "terminal_
 CONTINUATION_GAP_M = 40.0
 #: how far left of its partner's lanes it runs, in that one's median (m)
 CONTINUATION_SIDE_M = 1.0
+#: a real ramp turning within this of straight on or of a U-turn (degrees, its ``turn_deg``
+#: wrapped) tells no orientation (:func:`layout_roads`)
+REAL_TURN_MIN_DEG = 20.0
 
 
 @dataclass(frozen=True)
@@ -116,14 +123,15 @@ def layout_roads(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     plan = _Placement.of(topo, lanes, st, slopes or {}, climbing)
     units = [e for e in plan.order if e not in plan.through_of and e not in plan.tees]
     base = {e: np.pi / 2 - k * np.pi / 2 for k, e in enumerate(units[:2])}
-    best, best_score = None, -1e9
+    best, best_score = None, (-1e9, -1e9)
     for flip, side in itertools.product([False, True] if len(units) > 1 else [False],
                                         [1.0, -1.0] if plan.tees else [0.0]):
         opts = dict(base)
         if flip:
             opts[units[1]] += np.pi
         roads = plan.place(plan.square(plan.spread(opts, units), side))
-        score = _turn_side_score(topo, roads)
+        # the real turns first (0 on every orientation of a topology without them)
+        score = (_real_turn_score(topo, roads), _turn_side_score(topo, roads))
         if score > best_score:
             best, best_score = roads, score
     return best
@@ -152,6 +160,36 @@ def _cross_section(topo: Topology, lanes: Mapping[str, int], st: LayoutSettings,
     half = {e: max(ref[r] for r in rs) + max(lanes.get(r, st.default_lanes) for r in rs)
             * st.lane_width_m + st.shoulder_width_m for e, rs in exps.items()}
     return ref, half
+
+
+def _real_turn_score(topo: Topology, roads: Mapping[str, RoadLine]) -> int:
+    """How well an orientation keeps the real turns of the ramps between two roads: +1 for
+    each ramp turning to the side its real one turns to, -1 for one turning to the other.
+    A real turn is the ramp node's ``turn_deg`` (the OSM reader's measurement of the real
+    ramp: its heading change, left positive, a loop about -270), wrapped; ramps without one
+    (catalog specs, GraphML without coordinates), ramps of a chain (their own turn is not
+    their chain's) and turns within :data:`REAL_TURN_MIN_DEG` of straight on or of a U-turn
+    (really or as laid) count nothing."""
+    score = 0
+    g = topo.graph
+    for ramp in topo.ramps:
+        real = g.nodes[ramp].get("turn_deg")
+        start, end = ends(topo, ramp)
+        if real is None or start is None or end is None or start[0] not in roads \
+                or end[0] not in roads or start[0] == end[0]:
+            continue
+        real = wrap(math.radians(float(real)))
+        laid = wrap(roads[end[0]].heading - roads[start[0]].heading)
+        if not _telling(real, math.radians(REAL_TURN_MIN_DEG)) or not _telling(laid, 0.2):
+            continue
+        score += 1 if (real > 0) == (laid > 0) else -1
+    return score
+
+
+def _telling(turn: float, margin: float) -> bool:
+    """A turn (rad, wrapped) that is a left or a right one: more than ``margin`` from
+    straight on and from a U-turn."""
+    return margin < abs(turn) < np.pi - margin
 
 
 def _turn_side_score(topo: Topology, roads: Mapping[str, RoadLine]) -> int:

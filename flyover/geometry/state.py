@@ -173,25 +173,30 @@ class LayoutState:
         over it, and a collector road's second stub (:meth:`LevelPlan.continues_level`:
         level, at its parent's height, beside its road) before those: it has neither a
         height nor a side to give way with, and a connector forking off its parent beside
-        it has both (Columbus's ``r2`` beside ``r13``). An outer connector that shares no
-        road with the loop it goes round (:meth:`Movements.goes_round`: it reaches the
-        loop's roads through stubs) comes after that loop if the loop can come first, so
-        that it is fitted round it (Columbus's ``r11`` round ``r6``, which leaves a stub
-        fitted in ``r11``'s round), and so does the stub it leaves (joins), whose free end
-        then keeps the room the connector needs to go round the fitted loop
-        (:meth:`flyover.geometry.loop_room.LoopRoom.fences`: Columbus's ``r1``); on a
-        shared road their windows keep them apart
-        (:meth:`flyover.geometry.rails.RoadWindows.road_rail`)."""
+        it has both (Columbus's ``r2`` beside ``r13``). An outer connector
+        (:meth:`Movements.goes_round`) comes after the loop it goes round if the loop can
+        come first, so that it is fitted round it: on a road they share, their windows
+        keep it round the fitted loop (:meth:`flyover.geometry.rails.RoadWindows.in_order`;
+        the catalog's loops ``l*`` come before their connectors ``o*`` by id anyway, the
+        Bangor cloverleaf's loops ``r5``-``r8`` came after their ``r1``-``r4``, which then
+        went over or under them); on none (it reaches the loop's roads through stubs:
+        Columbus's ``r11`` round ``r6``, which leaves a stub fitted in ``r11``'s round) so
+        does the stub it leaves (joins), whose free end then keeps the room the connector
+        needs to go round the fitted loop
+        (:meth:`flyover.geometry.loop_room.LoopRoom.fences`: Columbus's ``r1``)."""
         done: set[str] = set()
         out = []
         todo = list(self.topo.ramps)
         on = {r: {e[0] for e in ends(self.topo, r) if e and e[0] in self.roads} for r in todo}
-        rounds = {r: [k for k in todo if self.moves.goes_round(r, k) and not on[r] & on[k]]
+        # on a shared road only where the loop's id comes later (else id order has it first
+        # and the other ramps keep their rounds: the catalog's parclos)
+        rounds = {r: [k for k in todo if self.moves.goes_round(r, k) and (not on[r] & on[k]
+                                                                          or k > r)]
                   for r in todo}
-        for r in todo:  # a stub whose child goes round a loop so waits for that loop too
-            if self.moves.is_stub(r):
+        for r in todo:  # a stub whose child goes round a loop on no road they share so
+            if self.moves.is_stub(r):  # waits for that loop too
                 rounds[r] = sorted({k for c in self.moves.kids(r) if c in rounds
-                                    for k in rounds[c]})
+                                    for k in rounds[c] if not on[c] & on[k]})
         while todo:
             ready, waiting = [], []
             for r in todo:

@@ -42,7 +42,10 @@ def read_osm_topologies(path: str | os.PathLike, options: OsmOptions | None = No
     Each topology's name is stable (its corridors' refs and its first OSM
     node id); ``topology.attrs["osm"]`` carries the geometry for
     :func:`flyover.osm.plot.plot_osm_topology`, ramps carry ``length_m``,
-    ``min_radius_m`` (and ``grade_pct`` where nodes have ``ele``). ``workers`` > 1
+    ``min_radius_m``, ``turn_deg`` (heading change from start to end, left positive, not
+    wrapped: a loop about -270, in the right-hand frame of a mirrored left-hand extract;
+    the road layout turns them as they really do) and ``grade_pct`` where nodes have
+    ``ele``. ``workers`` > 1
     (default ``options.workers``) reads the extract's second pass and builds the places
     of a large extract in that many processes (the same result).
     """

@@ -47,7 +47,7 @@ from flyover.osm.cluster import cluster_link_groups
 from flyover.osm.corridors import name_corridors
 from flyover.osm.driving_side import driving_side_at
 from flyover.osm.geom import (LocalProjection, arclength, bearing_letter, min_radius, point_at, run_beside,
-                              segment_distances, turn_deg)
+                              segment_distances, signed_turn_deg, turn_deg)
 from flyover.osm.reader import OsmNetwork, gc_paused, normalize_ref
 from flyover.topology.model import Connection, Label, Ramp, Road, Topology
 from flyover.topology.names import MAX_NAME_LENGTH, safe_name
@@ -1247,7 +1247,8 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         if k[0] == "direct":
             real = _direct_ramp_line(b, edges, k)
             node_attrs[rid] = {"length_m": round(float(arclength(real)[-1]), 1),
-                               "min_radius_m": round(min_radius(real), 1), "osm_ways": ""}
+                               "min_radius_m": round(min_radius(real), 1),
+                               "turn_deg": round(signed_turn_deg(real), 1), "osm_ways": ""}
             lines[rid] = real.tolist()
             continue
         if k[0] != "ramp":
@@ -1257,7 +1258,7 @@ def _topology(nw: _Network, b: _Builder, edges: list) -> Topology:
         st = b.st[k[1]]
         real = st.xy[(1 if st.start in nw.snapped else 0):(-1 if st.end in nw.snapped else None)]
         attrs = {"length_m": round(float(arclength(real)[-1]), 1), "min_radius_m": round(min_radius(real), 1),
-                 "osm_ways": " ".join(map(str, st.ways))}
+                 "turn_deg": round(signed_turn_deg(real), 1), "osm_ways": " ".join(map(str, st.ways))}
         gap = sum(nw.snapped.get(x, 0.0) for x in (st.start, st.end))
         if gap:
             attrs["snapped_m"] = round(gap, 1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["LocalProjection", "arclength", "point_at", "min_radius", "segment_distances", "bearing_letter",
-           "turn_deg", "run_beside"]
+           "turn_deg", "signed_turn_deg", "run_beside"]
 
 _EARTH_RADIUS_M = 6_371_008.8
 
@@ -96,13 +96,24 @@ def bearing_letter(v: np.ndarray) -> str:
 def turn_deg(xy) -> float:
     """Total signed heading change along a polyline ``(n, 2)``, in degrees (absolute value);
     steps shorter than 0.5 m are skipped."""
+    return abs(signed_turn_deg(xy))
+
+
+def signed_turn_deg(xy) -> float:
+    """Total heading change along a polyline ``(n, 2)``, in degrees, left (anticlockwise)
+    positive and not wrapped (a cloverleaf loop about -270); steps shorter than 0.5 m are
+    skipped.
+
+    >>> round(signed_turn_deg([(0, 0), (10, 0), (10, 10), (0, 10)]))
+    180
+    """
     xy = np.asarray(xy, float).reshape(-1, 2)
     d = np.diff(xy, axis=0)
     d = d[np.hypot(*d.T) > 0.5]
     if len(d) < 2:
         return 0.0
     da = np.diff(np.arctan2(d[:, 1], d[:, 0]))
-    return float(np.degrees(abs(((da + np.pi) % (2 * np.pi) - np.pi).sum())))
+    return float(np.degrees(((da + np.pi) % (2 * np.pi) - np.pi).sum()))
 
 
 def run_beside(line, other, separation_m: float, max_length_m: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from flyover.topology.io import TOPOLOGY_SUFFIXES
 validate_config(config, "config/config.yaml")
 
 # Bump a stage's version when its algorithm changes: params are rerun triggers.
-TOPOLOGY_VERSION = 6  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader; 5: OSM connectors between roads, ref-less carriageways paired by name, 3+ motorway link groups one interchange, direct ramps with geometry, self-check legs by carriageway pairs; 6: a carriageway turning back by over 90° at one node is two (DC US 50 stub: one road 7 → two, 8 roads)
+TOPOLOGY_VERSION = 6  # 2: representative.graphml per class; 3: safe names, FLYOVER ids; 4: pyosmium OSM reader; 5: OSM connectors between roads, ref-less carriageways paired by name, 3+ motorway link groups one interchange, direct ramps with geometry, self-check legs by carriageway pairs; 6: a carriageway turning back by over 90° at one node is two (DC US 50 stub: one road 7 → two, 8 roads); 7: OSM ramps carry turn_deg (their real heading change) in the GraphML
 # export 2: one job per class; 3: auxiliary lanes beside tapers, weaving sections
 EXPORT_VERSION = 14  # 4: every continuing lane linked (gore shoulders from zero width), joins snapped; 5: plan.png in 40 m chunks, fixed layout; 6: connecting roads taper over 2/3 of the section (CommonRoad); 7: a straight-on branch of a fork or join changes its lane width over a taper on its body, not the connecting road; 8: paramPoly3 records cut so that road position s is within 5 cm of arc length (heights were up to 356 m from their place); 9: the lanes of a two-lane speed-change region close (open) one at a time, each over its own taper; 10: paramPoly3 parts within 0.25 m of arc length (was 5 cm; ~30 % smaller files, faster checks); 11: where a carriageway ends into (begins from) a narrower ramp straight on, the lanes beyond the ramp's close (open) one at a time on its body, each over its own taper (two together on the T designs and trumpet); 12: a lane that opens from zero width stops widening 1e-5 of its taper before the taper's end (CommonRoad's converter missed the end and re-drew the lane over its whole lanelet: 1-2 cm join/split errors); 13: width, offset and height cubics' b, c, d to 15 significant digits (12 decimals left a closing lane 2.6e-7 m wide at its end, above CommonRoad's 1e-8 m: its polylines_intersection errors); 14: the lanes that go on past a width transition of several tapers change their width over the whole transition, not its first taper (DC r4: 276 m read back as 239 m on the lane centre)
 VALIDATION_VERSION = 6  # 4: one job per class, the SUMO network of the export stage; 5: clearance compares a ramp with itself (a loop over its own lane); 6: clearance samples thinned to 4 per metre (same conflicts, 4x faster)
@@ -275,7 +275,14 @@ def class_tables(stage):
 #     targets has its parent refitted with its run beside its road half, then all of the
 #     child's radius farther along, kept only if both then meet their targets
 #     (build._moved_run: Columbus's r12 into r11)
-GEOMETRY_VERSION = 42
+# 43: the road layout lays each ramp between two roads turning to the side its real one
+#     turns to (the OSM reader's turn_deg), before the turn-side score (roads.layout_roads:
+#     the Bangor cloverleaf was laid mirrored, its outer connectors as left flyovers;
+#     Sydney, Portland Marquam and Boston I-93/US 1 change too); a ramp whose real one turns
+#     right by over 180 deg is a loop even leaving before 0.4 (Bangor's r7); an outer
+#     connector on a road its loop shares is fitted after the loop (state.order: Bangor's
+#     r1-r4 came first by id); catalog bytes unchanged
+GEOMETRY_VERSION = 43
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
