@@ -985,3 +985,50 @@ def test_columbus_r11s_run_moves_along_i270_north_for_r12_that_cannot_come_round
     r12 = out["r12"].fit
     assert inf_met(min(r12.min_radius_m, r12.point_radius_m))
     assert r12.spec.end.parent == "r11" and out["r11"].fit.ok
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_loop_r5_joins_r13_before_r13_passes_under_i70(monkeypatch):
+    """The workflow's Columbus covering-array set 70 (rule sample_class's feature sets, at
+    its seed): the collector road r13 starts 105 m south of I-70 (r8 ends there) and
+    passes under it about 94 m on; the loop r5's window on r13 was 40-85 % of it,
+    186-394 m, all past I-70, so r5 (from I-70 East at 6.5 m) had to come down under
+    both carriageways to join r13 at 0.5 m and met them in every build (kept with the
+    conflict after resamples and rebuilds). Now a loop joining a fitted ramp joins it on
+    its own side of the road it leaves (rails.RampWindows.in_quadrant): r5's window ends
+    before r13's lane beside it comes within crossing_margin_m of I-70's outer edge."""
+    from flyover.geometry import build as B  # noqa: PLC0415
+
+    topo, lanes, feats = _columbus_set((4, 5, 3, 5), {
+        "r1": (210.0, 4.0), "r10": (30.0, 1.0), "r11": (210.0, 5.0), "r12": (math.inf, 4.0),
+        "r13": (60.0, 0.0), "r14": (280.0, 1.0), "r2": (30.0, 5.0), "r3": (30.0, 5.0),
+        "r4": (210.0, 4.0), "r5": (210.0, 2.0), "r6": (150.0, 5.0), "r7": (210.0, 3.0),
+        "r8": (math.inf, 4.0), "r9": (40.0, 2.0)})
+    seen = {}
+
+    class Reached(Exception):
+        pass
+
+    def first_try(b, ramp, feat, rseed, outcomes, spent):
+        if ramp == "r5":  # r13 is fitted: r5's spec and r13's stations, then stop
+            seen["spec"] = b.spec(ramp, feat)
+            seen["r13"] = b.fitted.stations["r13"]
+            seen["I70E"] = b.roads["I70E"]
+            raise Reached
+        return orig(b, ramp, feat, rseed, outcomes, spent)
+
+    orig = B._first_try
+    monkeypatch.setattr(B, "_first_try", first_try)
+    with pytest.raises(Reached):
+        build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=70,
+                          seed=1873498628)
+    end, st, q = seen["spec"].end, seen["r13"], seen["I70E"]
+    assert end.parent == "r13"
+    # where r13's centre comes within I-70's half width and the margin of its median edge
+    n = np.array([-np.sin(q.heading), np.cos(q.heading)])
+    lat = (st["xy"] - np.array(q.origin)) @ n
+    near = st["s"][np.argmax(-lat <= q.half_width + LayoutSettings().crossing_margin_m)]
+    assert 50.0 < near < 150.0  # r13 reaches I-70 soon after it starts
+    assert end.hi <= near  # r5 joins r13 before it
+    assert end.hi - end.lo >= 5.0
