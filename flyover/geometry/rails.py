@@ -341,7 +341,6 @@ class RampWindows:
             lo, hi = 0.15 * length, 0.6 * length
         else:
             lo, hi = self.reach_run(parent, ramp, label, 0.4 * length, 0.85 * length)
-            lo, hi = self.in_quadrant(parent, ramp, off, width, lo, hi)
         lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
                              lo, hi)
         for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
@@ -352,47 +351,6 @@ class RampWindows:
         if not is_start:
             lo, hi = self.straight_on(parent, ramp, label, lo, hi)
         return lo, hi
-
-    def in_quadrant(self, parent: str, ramp: str, off: float, width: float, lo: float,
-                    hi: float) -> tuple[float, float]:
-        """``lo..hi`` (stations on ``parent``) of a loop joining a fitted ramp, cut to where
-        the child's lane beside the parent lies on the loop's side of the road the loop
-        leaves, ``crossing_margin_m`` off that expressway's outer edge: a loop turns three
-        quarters round within its quadrant and joins there, before its parent passes under
-        (over) the road it came from. Of the runs of such stations (within 5-95 % of the
-        parent) the one overlapping ``lo..hi`` most, else the longest; unchanged for any
-        other child, a loop leaving a ramp, when every station of ``lo..hi`` lies so or
-        none does for :data:`LEVEL_RUN_M`. On the workflow's Columbus set 70 the loop
-        ``r5`` (from I-70 East) had its window on the collector road ``r13`` at 186-394 m,
-        all of it past where ``r13`` passes under I-70 (94 m): ``r5`` met I-70 East and West
-        coming down under them to join it, in every build (kept with the conflict)."""
-        if not self.moves.is_loop(ramp):
-            return lo, hi
-        road = ends(self.topo, ramp)[0]
-        if road[0] not in self.roads:
-            return lo, hi
-        q = self.roads[road[0]]
-        sgn = -1.0 if road[1].side == "right" else 1.0
-        st = self.fitted.stations[parent]
-        s, xy, head = st["s"], st["xy"], st["heading"]
-        left = np.stack([-np.sin(head), np.cos(head)], -1)
-        n = np.array([-np.sin(q.heading), np.cos(q.heading)])
-        side = np.ones(len(s), bool)
-        for k in (off - width, off):  # both edges of the child's lane
-            lat = (xy + k * left - np.array(q.origin)) @ n
-            side &= sgn * lat > q.half_width + self.st.crossing_margin_m
-        inside = (s >= lo) & (s <= hi)
-        if side[inside].all():
-            return lo, hi
-        length = s[-1]
-        ok = side & (s >= 0.05 * length) & (s <= 0.95 * length)
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-        runs = [(float(s[a]), float(s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
-        runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
-        if not runs:
-            return lo, hi
-        a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
-        return (max(a, lo), min(b, hi)) if min(b, hi) - max(a, lo) >= LEVEL_RUN_M else (a, b)
 
     def in_order(self, parent: str, ramp: str, pos: float, width: float,
                  feat: RampFeatures | None) -> tuple[float, float]:

@@ -275,10 +275,7 @@ def class_tables(stage):
 #     targets has its parent refitted with its run beside its road half, then all of the
 #     child's radius farther along, kept only if both then meet their targets
 #     (build._moved_run: Columbus's r12 into r11)
-# 43: a loop joining a fitted ramp joins it on its own side of the road it leaves, before
-#     that ramp passes under (over) it (rails.RampWindows.in_quadrant: Columbus's r5 onto
-#     r13 before I-70)
-GEOMETRY_VERSION = 43
+GEOMETRY_VERSION = 42
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
