@@ -275,7 +275,9 @@ def class_tables(stage):
 #     targets has its parent refitted with its run beside its road half, then all of the
 #     child's radius farther along, kept only if both then meet their targets
 #     (build._moved_run: Columbus's r12 into r11)
-GEOMETRY_VERSION = 42
+# 43: a stub round its loop is not lifted nor restarted (build._round_fit; CPU: Columbus's
+#     r1 round r6)
+GEOMETRY_VERSION = 43
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
