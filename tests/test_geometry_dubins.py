@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from flyover.geometry.dubins import shortest, words
+from flyover.geometry.dubins import WORDS, ranks, shortest, table, totals, words
 
 
 def _drive(p0, h0, r, word, lengths):
@@ -88,3 +88,51 @@ def test_words_drive_to_the_end_pose_and_the_first_is_the_shortest(seed):
             assert h - h0 == pytest.approx(w.turn)
             x, y, hh = w.poses(p0[0], p0[1], h0, np.array([w.length]))[0]
             assert np.hypot(x - p1[0], y - p1[1]) < 1e-6 * max(1.0, w.length)
+
+
+def _poses_one_by_one(w, x, y, h, at):
+    """:meth:`Word.poses` as it was written before it took many arc lengths at once."""
+    out = np.empty((len(at), 3))
+    ends = np.cumsum(w.lengths)
+    for i, s in enumerate(np.asarray(at, float)):
+        px, py, ph, done = x, y, h, 0.0
+        for c, seg, end in zip(w.word, w.lengths, ends):
+            ds = min(max(s - done, 0.0), seg)
+            if c == "S":
+                px, py = px + ds * np.cos(ph), py + ds * np.sin(ph)
+            else:
+                k = 1.0 if c == "L" else -1.0
+                nh = ph + k * ds / w.r
+                px += k * w.r * (np.sin(nh) - np.sin(ph))
+                py -= k * w.r * (np.cos(nh) - np.cos(ph))
+                ph = nh
+            done = end
+            if s <= end:
+                break
+        out[i] = px, py, ph
+    return out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_table_is_words_float_for_float(seed):
+    """:func:`table` over many pose pairs at once gives the words :func:`words` gives one
+    pair at a time, to the bit: which exist, their lengths, :func:`totals` their length and
+    turn, :func:`ranks` their order; :meth:`Word.poses` at many arc lengths at once the
+    poses it gave one by one (the detour and Dubins guesses are built so, byte for byte)."""
+    rng = np.random.default_rng(seed)
+    p0, h0 = rng.uniform(-80, 80, (30, 2)), rng.uniform(-3, 3, 30)
+    p1, h1 = rng.uniform(-80, 80, (30, 2)), rng.uniform(-3, 3, 30)
+    r = float(rng.uniform(5, 40))
+    ok, lengths = table(p0, h0, p1, h1, r)
+    for i in range(30):
+        ws = words(p0[i], h0[i], p1[i], h1[i], r)
+        assert [w.word for w in ws] == [WORDS[k] for k in np.argsort(ranks(ok[i], totals(
+            lengths[i], "SSS", r)[0]))[:int(ok[i].sum())]]
+        for w in ws:
+            k = WORDS.index(w.word)
+            assert ok[i, k] and tuple(float(x) for x in lengths[i, k]) == w.lengths
+            length, turn = totals(lengths[i, k], w.word, r)
+            assert (float(length), float(turn)) == (w.length, w.turn)
+            at = np.linspace(-5.0, w.length + 5.0, 23)
+            assert np.array_equal(w.poses(p0[i, 0], p0[i, 1], h0[i], at),
+                                  _poses_one_by_one(w, p0[i, 0], p0[i, 1], h0[i], at))

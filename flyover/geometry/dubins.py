@@ -107,25 +107,23 @@ class Word:
     def poses(self, x: float, y: float, h: float, at: np.ndarray) -> np.ndarray:
         """Poses ``(N, 3)`` (x, y, heading, unwrapped) at arc lengths ``at`` along the path
         from ``(x, y, h)``."""
-        out = np.empty((len(at), 3))
-        ends = np.cumsum(self.lengths)
-        for i, s in enumerate(np.asarray(at, float)):
-            px, py, ph, done = x, y, h, 0.0
-            for c, seg, end in zip(self.word, self.lengths, ends):
-                ds = min(max(s - done, 0.0), seg)
-                if c == "S":
-                    px, py = px + ds * np.cos(ph), py + ds * np.sin(ph)
-                else:
-                    k = 1.0 if c == "L" else -1.0
-                    nh = ph + k * ds / self.r
-                    px += k * self.r * (np.sin(nh) - np.sin(ph))
-                    py -= k * self.r * (np.cos(nh) - np.cos(ph))
-                    ph = nh
-                done = end
-                if s <= end:
-                    break
-            out[i] = px, py, ph
-        return out
+        s = np.asarray(at, float)
+        px, py, ph = (np.full(len(s), v, float) for v in (x, y, h))
+        going = np.ones(len(s), bool)  # not yet at its arc length
+        done = 0.0
+        for c, seg, end in zip(self.word, self.lengths, np.cumsum(self.lengths)):
+            ds = np.minimum(np.maximum(s - done, 0.0), seg)
+            if c == "S":
+                nx, ny, nh = px + ds * np.cos(ph), py + ds * np.sin(ph), ph
+            else:
+                k = 1.0 if c == "L" else -1.0
+                nh = ph + k * ds / self.r
+                nx = px + k * self.r * (np.sin(nh) - np.sin(ph))
+                ny = py - k * self.r * (np.cos(nh) - np.cos(ph))
+            px, py, ph = np.where(going, nx, px), np.where(going, ny, py), np.where(going, nh, ph)
+            done = end
+            going &= ~(s <= end)
+        return np.stack([px, py, ph], -1)
 
 
 def words(p0, h0: float, p1, h1: float, r: float) -> list[Word]:
@@ -140,3 +138,40 @@ def words(p0, h0: float, p1, h1: float, r: float) -> list[Word]:
     out = [(w, t, p, q) for w, ok, t, p, q in _segments(p0, h0, p1, h1, r) if ok]
     ws = [Word(w, (float(t) * r, float(p) * r, float(q) * r), float(r)) for w, t, p, q in out]
     return sorted(ws, key=lambda w: w.length)
+
+
+#: the six words in :func:`_segments`'s order
+WORDS = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
+
+
+def table(p0, h0, p1, h1, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """The six words of :func:`words` for many pose pairs at once (broadcast): whether each
+    exists ``(..., 6)`` and its three segments' lengths in metres ``(..., 6, 3)``, in
+    :data:`WORDS`'s order (as :func:`words` computes them, float for float)."""
+    segs = _segments(p0, h0, p1, h1, r)
+    shape = np.broadcast(*[a for s in segs for a in s[1:]]).shape
+    ok = np.stack([np.broadcast_to(s[1], shape) for s in segs], -1)
+    lengths = np.stack([np.stack([np.broadcast_to(a * r, shape) for a in s[2:]], -1)
+                        for s in segs], -2)
+    return ok, lengths
+
+
+def totals(lengths: np.ndarray, word: str, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """:attr:`Word.length` and :attr:`Word.turn` of paths spelled ``word`` with segment
+    lengths ``lengths`` (``(..., len(word))``), summed in :class:`Word`'s order."""
+    length = np.zeros(lengths.shape[:-1])
+    turn = np.zeros(lengths.shape[:-1])
+    sign = {"L": 1.0, "R": -1.0, "S": 0.0}
+    for k, c in enumerate(word):
+        length = length + lengths[..., k]
+        turn = turn + sign[c] * lengths[..., k] / r
+    return length, turn
+
+
+def ranks(ok: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """The order :func:`words` lists the words in (shortest first, ties in :data:`WORDS`'s
+    order; one that does not exist last): each word's rank ``(..., 6)``."""
+    order = np.argsort(np.where(ok, length, np.inf), axis=-1, kind="stable")
+    out = np.empty_like(order)
+    np.put_along_axis(out, order, np.arange(order.shape[-1]), axis=-1)
+    return out

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from flyover.geometry.dubins import Word, words
+from flyover.geometry.dubins import WORDS, Word, ranks, table, totals
 from flyover.geometry.fit import LEAD_MIN_M, RampSpec, bounds
 
 __all__ = ["DubinsGuess", "can_guess", "detour_guesses", "dubins_guess", "path_pieces"]
@@ -86,7 +86,10 @@ def _main_turn_left(word: Word) -> bool:
 
 def _best_word(spec: RampSpec, n: int) -> tuple[float, float, Word] | None:
     """The shortest path turning by the spec's turn between ``n`` × ``n`` stations of its
-    windows (from the end of a minimal start lead to the start of a minimal end lead)."""
+    windows (from the end of a minimal start lead to the start of a minimal end lead):
+    of each pair of stations, the first of its words (:func:`flyover.geometry.dubins.words`'s
+    order) that turns so with its longest arc to the side asked for; of those, the shortest
+    (on a tie, the first side, then start station, then end station)."""
     a, b = spec.start, spec.end
     lead = LEAD_MIN_M if any(spec.leads()) else 0.0
     sa = np.linspace(a.lo, a.hi, n) if a.hi - a.lo > 1e-6 else np.array([a.lo])
@@ -95,21 +98,34 @@ def _best_word(spec: RampSpec, n: int) -> tuple[float, float, Word] | None:
     pb, hb, _ = b.at(sb)
     pa = pa + lead * np.stack([np.cos(ha), np.sin(ha)], -1)
     pb = pb - lead * np.stack([np.cos(hb), np.sin(hb)], -1)
+    raw = hb[None, :] - ha[:, None]
+    tr = spec.turn_rad + ((raw - spec.turn_rad + np.pi) % (2 * np.pi) - np.pi)
     best = None
     for left in (True, False):
         r = _reference_radius(spec, left)
         if r <= 1.0:
             continue
-        for i in range(len(sa)):
-            for j in range(len(sb)):
-                raw = hb[j] - ha[i]
-                tr = spec.turn_rad + ((raw - spec.turn_rad + np.pi) % (2 * np.pi) - np.pi)
-                for w in words(pa[i], ha[i], pb[j], hb[j], r):
-                    if abs(w.turn - tr) > 1e-6 or _main_turn_left(w) != left:
-                        continue
-                    if best is None or w.length < best[2].length:
-                        best = (float(sa[i]), float(sb[j]), w)
-                    break  # the shortest of this pair that turns so
+        ok, seg = table(pa[:, None], ha[:, None], pb[None], hb[None], r)
+        length = np.empty(ok.shape)
+        fits = np.empty(ok.shape, bool)
+        for w, word in enumerate(WORDS):
+            length[..., w], turn = totals(seg[..., w, :], word, r)
+            arcs = [k for k, c in enumerate(word) if c != "S"]
+            most = {c: np.max([seg[..., w, k] for k in arcs if word[k] == c] or [np.full(
+                turn.shape, -np.inf)], axis=0) for c in "LR"}
+            fits[..., w] = ok[..., w] & ~(np.abs(turn - tr) > 1e-6) & (
+                (most["L"] > most["R"]) == left)
+        # the first word of each pair (in words' order) that fits
+        rank = np.where(fits, ranks(ok, length), len(WORDS))
+        w = np.argmin(rank, axis=-1)
+        first = np.take_along_axis(length, w[..., None], -1)[..., 0]
+        first = np.where(np.min(rank, axis=-1) < len(WORDS), first, np.inf)
+        k = int(np.argmin(first))
+        i, j = np.unravel_index(k, first.shape)
+        if np.isfinite(first[i, j]) and (best is None or first[i, j] < best[2].length):
+            ls = seg[i, j, w[i, j]]
+            best = (float(sa[i]), float(sb[j]),
+                    Word(WORDS[w[i, j]], (float(ls[0]), float(ls[1]), float(ls[2])), float(r)))
     return best
 
 
@@ -173,12 +189,16 @@ def _turn(word: Word, a: float, b: float) -> float:
     return out
 
 
-def _handles(word: Word, x0: float, y0: float, h0: float, a: float, b: float,
-             p0: np.ndarray, h_a: float, p3: np.ndarray, h_b: float) -> tuple[float, float]:
+#: where along a piece (0-1) the cubic is held near the path (:func:`_handles`)
+_HELD = np.linspace(0.0, 1.0, 17)
+
+
+def _handles(target: np.ndarray, p0: np.ndarray, h_a: float, p3: np.ndarray,
+             h_b: float) -> tuple[float, float]:
     """Tangent lengths (m) of the cubic from ``p0`` heading ``h_a`` to ``p3`` heading
-    ``h_b`` nearest (least squares) the path between arc lengths ``a`` and ``b``."""
-    t = np.linspace(0.0, 1.0, 17)
-    target = word.poses(x0, y0, h0, a + t * (b - a))[:, :2]
+    ``h_b`` nearest (least squares) the path's points ``target`` (``(17, 2)``, at
+    :data:`_HELD` of a part of it)."""
+    t = _HELD
     ta, tb = np.array([np.cos(h_a), np.sin(h_a)]), np.array([np.cos(h_b), np.sin(h_b)])
     b0, b1, b2, b3 = (1 - t) ** 3, 3 * (1 - t) ** 2 * t, 3 * (1 - t) * t ** 2, t ** 3
     base = (b0 + b1)[:, None] * p0 + (b2 + b3)[:, None] * p3
@@ -226,12 +246,16 @@ def _vector(spec: RampSpec, sa: float, sb: float, word: Word,
     lead = LEAD_MIN_M if any(spec.leads()) else 0.0
     pa, ha, _ = spec.start.at(np.array([sa]))
     x0, y0, h0 = pa[0, 0] + lead * np.cos(ha[0]), pa[0, 1] + lead * np.sin(ha[0]), float(ha[0])
-    joints = word.poses(x0, y0, h0, np.array([a for a, _ in parts] + [parts[-1][1]]))
+    # the joints, then each part's points the cubic is held near, in one pass along the path
+    at = np.concatenate([np.array([a for a, _ in parts] + [parts[-1][1]])]
+                        + [a + _HELD * (b - a) for a, b in parts])
+    poses = word.poses(x0, y0, h0, at)
+    joints, held = poses[:p + 1], poses[p + 1:, :2].reshape(p, len(_HELD), 2)
     lam_out, lam_in = np.empty(p), np.empty(p)
-    for k, (a, b) in enumerate(parts):
+    for k in range(p):
         j0, j1 = joints[k], joints[k + 1]
         span = max(float(np.hypot(*(j1[:2] - j0[:2]))), 1e-6)
-        out, into = _handles(word, x0, y0, h0, a, b, j0[:2], j0[2], j1[:2], j1[2])
+        out, into = _handles(held[k], j0[:2], j0[2], j1[:2], j1[2])
         lam_out[k], lam_in[k] = out / span, into / span
     x = [sa, sb] + [lead] * sum(sp.leads()) + [lam_out[0], lam_in[-1]]
     c = joints[-1, :2] - joints[0, :2]
@@ -278,23 +302,34 @@ def detour_guesses(spec: RampSpec, length_m: float, pieces: int = DETOUR_PIECES,
     c = p1 - p0
     d = max(float(np.hypot(*c)), 1.0)
     v = np.array([-c[1], c[0]]) / d
+    # waypoints (f, g, heading) in the order the paths are listed in
+    f = np.linspace(-0.25, 1.25, n)[:, None, None, None]
+    g = np.linspace(-1.0, 1.0, 2 * n - 1)[None, :, None, None]
+    q = np.broadcast_to(p0 + f * c + g * d * v, (n, 2 * n - 1, 8, 2))
+    hq = np.arange(8)[None, None, :] * np.pi / 4
+    ok1, seg1 = table(p0, h0, q, hq, r)
+    ok2, seg2 = table(q, hq, p1, h1, r)
+    # each pair of words through a waypoint (listed as words lists them, shortest first)
+    length = np.full(ok1.shape + (6,), np.inf)
+    for i, w1 in enumerate(WORDS):
+        for j, w2 in enumerate(WORDS):
+            ls = np.concatenate([seg1[..., i, :], seg2[..., j, :]], -1)
+            total, turn = totals(ls, w1 + w2, r)
+            keep = ok1[..., i] & ok2[..., j] & ~(np.abs(turn - tr) > 1e-6) \
+                & (length_m <= total) & (total <= DETOUR_SLACK * length_m)
+            length[..., i, j] = np.where(keep, total, np.inf)
+    len1 = totals(seg1, "SSS", r)[0]
+    len2 = totals(seg2, "SSS", r)[0]
+    o1 = np.argsort(ranks(ok1, len1), -1)  # the word at each rank
+    o2 = np.argsort(ranks(ok2, len2), -1)
+    listed = np.take_along_axis(np.take_along_axis(length, o1[..., :, None], -2),
+                                o2[..., None, :], -1).reshape(ok1.shape[:-1] + (36,))
+    near = np.argmin(listed, -1)  # the shortest through each waypoint (the first listed)
     paths = []
-    for f in np.linspace(-0.25, 1.25, n):
-        for g in np.linspace(-1.0, 1.0, 2 * n - 1):
-            q = p0 + f * c + g * d * v
-            for k in range(8):
-                hq = k * np.pi / 4
-                near = None
-                for w1 in words(p0, h0, q, hq, r):
-                    for w2 in words(q, hq, p1, h1, r):
-                        w = Word(w1.word + w2.word, w1.lengths + w2.lengths, r)
-                        if abs(w.turn - tr) > 1e-6 or not \
-                                length_m <= w.length <= DETOUR_SLACK * length_m:
-                            continue
-                        if near is None or w.length < near.length:
-                            near = w
-                if near is not None:
-                    paths.append(near)
+    for at in zip(*np.nonzero(np.isfinite(np.min(listed, -1)))):
+        i, j = o1[at][near[at] // 6], o2[at][near[at] % 6]
+        paths.append(Word(WORDS[i] + WORDS[j], tuple(float(x) for x in seg1[at][i])
+                          + tuple(float(x) for x in seg2[at][j]), r))
     paths.sort(key=lambda w: w.length)
     out = []
     for w in paths:

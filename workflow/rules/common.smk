@@ -281,7 +281,9 @@ def class_tables(stage):
 #     Sydney, Portland Marquam and Boston I-93/US 1 change too); a ramp whose real one turns
 #     right by over 180 deg is a loop even leaving before 0.4 (Bangor's r7); an outer
 #     connector on a road its loop shares is fitted after the loop (state.order: Bangor's
-#     r1-r4 came first by id); catalog bytes unchanged
+#     r1-r4 came first by id); catalog bytes unchanged;
+#     and a stub round its loop is not lifted nor restarted (build._round_fit; CPU: Columbus's
+#     r1 round r6)
 GEOMETRY_VERSION = 43
 
 
