@@ -275,7 +275,11 @@ def class_tables(stage):
 #     targets has its parent refitted with its run beside its road half, then all of the
 #     child's radius farther along, kept only if both then meet their targets
 #     (build._moved_run: Columbus's r12 into r11)
-GEOMETRY_VERSION = 42
+# 43: a ramp joining (leaving) a fitted ramp along it, neither a loop nor straight-on,
+#     attaches to its road within 1.5 x its turn and its climb to that ramp, one after
+#     the other, not the longer of them (RampSpecs.need_m; Columbus's r7 onto r3; of the
+#     catalog, trumpet changes in geometry_bytes 3)
+GEOMETRY_VERSION = 43
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
