@@ -789,13 +789,38 @@ def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau(columbus_set_26
     Its start window on I-70 East reaches no farther back than 1.5 x what it needs beyond
     the crossing's room (34.5 m), and the climb in that was read to r3's mean height
     (about 13 m): 702 m back, and r7 turned at 171.5 m (2.19 %) and missed its first
-    try. Now the climb is read at r3's height in r7's window: 13 m at 2 % with a 40 m
-    vertical curve is 690 m, and 40 m tapers: 34.5 + 1.5 x 770 = 1,189.5 m back."""
+    try. Then the climb was read at r3's height in r7's window: 13 m at 2 % with a 40 m
+    vertical curve is 690 m, and 40 m tapers: 34.5 + 1.5 x 770 = 1,189.5 m back; now
+    its turn (1.55 rad x 210 m) counts on top of that (RampSpecs.need_m), beyond the
+    window's reach: 1,500 m back (settings reach_m)."""
     out = columbus_set_26
     r7 = out["r7"].fit
     assert out["r7"].first_try_ok and r7.conflicts == 0
-    assert r7.end_pose[3] == pytest.approx(19.5, abs=1e-6)  # on r3's plateau
-    assert r7.spec.start.lo == pytest.approx(-1189.5, abs=1.0)
+    assert r7.end_pose[3] == pytest.approx(19.5, abs=0.01)  # on r3's plateau
+    assert r7.spec.start.lo == pytest.approx(-1500.0, abs=1.0)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r7_start_window_holds_its_turn_and_its_climb_to_r3():
+    """Drawn set 15 of benchmarks/geometry.py --osm (its seed): r7 (210 m / 4 %) leaves
+    I-70 East at 6.5 m, turns 2.24 rad and joins the flyover r3 along it on its 19.5 m
+    plateau. Its start window reached back the larger of its turn (2.24 x 210 m = 471 m)
+    and its climb (13 m at 4 % and a 40 m vertical curve: 365 m) and its tapers: 38.25 +
+    1.5 x (471 + 80) = 865 m, and every start nearer the crossing met r3 or I-70 East
+    (the benchmark's first build); the one from 857 m back held 195.9 m in 2,264 m. A
+    ramp joining a fitted ramp along it, neither a loop nor straight-on, now counts both,
+    one after the other: 38.25 + 1.5 x (471 + 365 + 80) = 1,412 m back, and r7 is first
+    try."""
+    out = _columbus_outcomes((3, 5, 5, 5), {
+        "r1": (280.0, 1.0), "r10": (30.0, 3.0), "r11": (210.0, 4.0), "r12": (math.inf, 5.0),
+        "r13": (150.0, 0.0), "r14": (60.0, 5.0), "r2": (100.0, 5.0), "r3": (30.0, 1.0),
+        "r4": (100.0, 5.0), "r5": (40.0, 3.0), "r6": (40.0, 2.0), "r7": (210.0, 4.0),
+        "r8": (210.0, 2.0), "r9": (150.0, 4.0)}, 15, 1234895117)
+    r7 = out["r7"].fit
+    assert r7.spec.end.parent == "r3"
+    assert out["r7"].first_try_ok and r7.conflicts == 0
+    assert r7.spec.start.lo == pytest.approx(-1411.8, abs=1.0)
 
 
 @pytest.mark.slow

@@ -111,7 +111,8 @@ class RampSpecs:
         bound = None
         if st.length_margin is not None and start is not None and end is not None \
                 and not self.moves.same_road(ramp):
-            bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end, on_ramp)
+            bound = (1.0 + st.length_margin) * self.need_m(turn, feat, start, end, on_ramp,
+                                                           loop)
         a, b = (r if r is not None else
                 w.rail(ramp, feat, e, k == 0, loop, width, x, bound, level) if e else None
                 for k, (r, e, x) in enumerate(zip(on_ramp, (start, end), (extra, extra_b))))
@@ -143,7 +144,7 @@ class RampSpecs:
         return max(arc, float(path.min()))
 
     def need_m(self, turn: float, feat: RampFeatures, start, end,
-               rails: tuple | list = (None, None)) -> float:
+               rails: tuple | list = (None, None), loop: bool = False) -> float:
         """What a ramp between two attached ends needs beyond the room it keeps from the
         crossing (which holds a flyover's climb): its turn at its target radius (an
         ``inf`` target: at ``inf_reference_m``) or the climb between its ends at its
@@ -153,17 +154,29 @@ class RampSpecs:
         stub's free end) at its mean height
         (Columbus's ``r7`` onto ``r3``'s 19.5 m plateau, from I-70 East at 6.5 m: ``r3``'s
         mean of 13-15 m gave half the climb, and a start window on I-70 East too near
-        the crossing for 210-280 m at 2-4 %)."""
+        the crossing for 210-280 m at 2-4 %). A ramp joining (leaving) a fitted ramp
+        along it that is neither a loop (``loop``) nor straight-on (a turn under 0.3 rad)
+        needs its turn and that climb, one after the other, not the longer: Columbus's
+        ``r7`` on set 15 (210 m / 4 %, 2.24 rad: 471 m, 13 m up to ``r3``: 365 m) left
+        I-70 East at most 865 m back, every start nearer the crossing met ``r3`` or
+        I-70 East, and the one from 857 m back held 195.9 m; 1,412 m back it is first
+        try. Loops and straight-on children keep
+        the longer (Columbus's loop ``r5`` onto ``r13`` and ``r12`` onto ``r11``'s run
+        missed on one set each with both counted)."""
         st = self.st
         r = feat.radius_m if np.isfinite(feat.radius_m) else st.fit.inf_reference_m
         g = max(feat.slope_pct, 0.5) / 100.0
         z = [self.fitted.end_z(start), self.fitted.end_z(end)]
+        along = False
         for k, rail in enumerate(rails):
             if rail is not None and rail.hi - rail.lo > 1.0:  # a window along it, not at
                 # its free end (one point: where it ends, its mean as before)
                 zs = rail.at(np.linspace(rail.lo, rail.hi, 24))[2]
                 z[k] = float(zs[np.argmin(np.abs(zs - z[1 - k]))])
+                along = True
         climb = float(climb_distance(z[1] - z[0], g, st.fit.transition_m))
+        if along and not loop and abs(turn) >= 0.3:  # it turns, then climbs along it
+            return abs(turn) * r + climb + 2.0 * st.gap_m
         return max(abs(turn) * r, climb) + 2.0 * st.gap_m
 
     def _leads(self, start, end, crest, free, feat: RampFeatures) -> tuple:

@@ -281,9 +281,13 @@ def class_tables(stage):
 #     Sydney, Portland Marquam and Boston I-93/US 1 change too); a ramp whose real one turns
 #     right by over 180 deg is a loop even leaving before 0.4 (Bangor's r7); an outer
 #     connector on a road its loop shares is fitted after the loop (state.order: Bangor's
-#     r1-r4 came first by id); catalog bytes unchanged;
+#     r1-r4 came first by id); catalog bytes unchanged by these;
 #     and a stub round its loop is not lifted nor restarted (build._round_fit; CPU: Columbus's
-#     r1 round r6)
+#     r1 round r6);
+#     and a ramp joining (leaving) a fitted ramp along it, neither a loop nor straight-on,
+#     attaches to its road within 1.5 x its turn and its climb to that ramp, one after
+#     the other, not the longer of them (RampSpecs.need_m; Columbus's r7 onto r3; of the
+#     catalog, trumpet changes in geometry_bytes 3)
 GEOMETRY_VERSION = 43
 
 
