@@ -78,10 +78,12 @@ def _reference_radius(spec: RampSpec, left: bool) -> float:
     return r - half if left else r + half
 
 
-def _main_turn_left(word: Word) -> bool:
-    """Whether the longest arc of the path turns left."""
-    arcs = [(s, c) for c, s in zip(word.word, word.lengths) if c != "S"]
-    return max(arcs)[1] == "L" if arcs else True
+def _main_turn_left(seg: np.ndarray, word: str) -> np.ndarray:
+    """Whether the longest arc of each path spelled ``word`` (a Dubins word, which has an
+    arc; segment lengths ``seg``, ``(..., 3)``) turns left; on a tie, right."""
+    most = {c: np.max([seg[..., k] for k, ck in enumerate(word) if ck == c]
+                      or [np.full(seg.shape[:-1], -np.inf)], axis=0) for c in "LR"}
+    return most["L"] > most["R"]
 
 
 def _best_word(spec: RampSpec, n: int) -> tuple[float, float, Word] | None:
@@ -110,11 +112,8 @@ def _best_word(spec: RampSpec, n: int) -> tuple[float, float, Word] | None:
         fits = np.empty(ok.shape, bool)
         for w, word in enumerate(WORDS):
             length[..., w], turn = totals(seg[..., w, :], word, r)
-            arcs = [k for k, c in enumerate(word) if c != "S"]
-            most = {c: np.max([seg[..., w, k] for k in arcs if word[k] == c] or [np.full(
-                turn.shape, -np.inf)], axis=0) for c in "LR"}
             fits[..., w] = ok[..., w] & ~(np.abs(turn - tr) > 1e-6) & (
-                (most["L"] > most["R"]) == left)
+                _main_turn_left(seg[..., w, :], word) == left)
         # the first word of each pair (in words' order) that fits
         rank = np.where(fits, ranks(ok, length), len(WORDS))
         w = np.argmin(rank, axis=-1)
