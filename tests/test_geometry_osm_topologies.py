@@ -221,6 +221,34 @@ def test_columbus_connector_goes_round_the_loop_off_the_collector_road(seed):
     assert not same_level_conflicts(g)
 
 
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r2_is_sampled_wider_than_the_loop_r5_joining_the_collector_road():
+    """Columbus: r2 (I-270 North through the stub r8 to I-70 East through the stub r14)
+    turns right round the outside of the loop r5 (I-70 East to the collector road r13):
+    the real r2 turns 61 degrees at 232 m, r5 250 degrees at 63 m (OSM turn_deg,
+    min_radius_m). r13 splits, so r5's chain reached no road and sampling drew r2 as
+    tight as r5 or tighter. r13 collects for I-270 North (it leaves it through r8, and r12
+    leads back onto it through r11), so to sampling r5 goes to I-270 North and r2 is its
+    outer connector, wider than it. The layout does not fit r2 round r5 (yet): for it
+    the chains end at r13 as before."""
+    from flyover.geometry.feasibility import round_loops  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
+    feats = {r: RampFeatures(60.0, 4.0) for r in topo.ramps}
+    b = LayoutState(topo, {}, feats, LayoutSettings(), 0)
+    m = b.moves
+    assert m.collects("r13") == "I270N" and m.collects("r5") is None
+    assert m.through_stubs("r5", True, collectors=True) == "I270N"
+    assert m.through_stubs("r5", True) is None
+    assert m.is_outer_connector("r2", "r5", collectors=True)
+    assert not m.is_outer_connector("r2", "r5")
+    assert not m.is_outer_connector("r9", "r5", collectors=True)
+    pairs = {(p.connector, p.loop): p for p in round_loops(topo)}
+    assert set(pairs) == {("r1", "r6"), ("r11", "r6"), ("r14", "r5"), ("r2", "r5")}
+    assert not pairs["r2", "r5"].allows(60.0, 60.0) and pairs["r2", "r5"].allows(150.0, 60.0)
+
+
 def _continued_t():
     """A through expressway A and two ending here that continue one another on one line
     (DC's I-66 and Potomac Freeway, file 26): C1 ends into u, which joins B1 on its left;

@@ -221,19 +221,23 @@ class Movements:
         return self.is_loop(other) and not self.is_loop(ramp) and \
             self.other_road(ramp, road) == self.other_road(other, road)
 
-    def through_stubs(self, ramp: str, forward: bool) -> str | None:
+    def through_stubs(self, ramp: str, forward: bool, collectors: bool = False
+                      ) -> str | None:
         """The road ``ramp``'s chain reaches forward (backward) through stubs alone: the
         ramp's end (start), else that of the stub it joins (leaves), and so on (Columbus's
         loop ``r6`` comes from I-270 North through the stubs ``r13`` and ``r8``); a
         collector-distributor road it joins (leaves) counts as the road it runs beside
         (``cloverleaf_cd``'s ``oA1`` from ``cA1``, beside A1, to ``cB1``, beside B1).
         ``None`` if the chain passes any other ramp with both ends (a connector) or a
-        stub with no end that way (it splits: which road is open)."""
+        stub with no end that way (it splits: which road is open); with ``collectors``,
+        forward, a collector road (:meth:`collects`) counts as the road it collects for: a
+        loop joining it goes to that road."""
         node, seen = ramp, {ramp}
         while True:
             nxt = ends(self.topo, node)[1 if forward else 0]
             if nxt is None:
-                return None
+                return self.collects(node) if collectors and forward and node != ramp \
+                    else None
             node = nxt[0]
             if node in self.roads:
                 return node
@@ -243,27 +247,46 @@ class Movements:
                 return None
             seen.add(node)
 
-    def goes_round(self, ramp: str, loop: str) -> bool:
+    def collects(self, stub: str) -> str | None:
+        """The road a splitting stub collects for: the one its chain comes from through
+        stubs, if one of its branches leads back onto it (Columbus's ``r13``, from I-270
+        North through ``r8``, splits into ``r12``, on through ``r11`` to I-270 North, and the
+        loop ``r6``; the loop ``r5`` from I-70 East joins it, a loop to I-270 North).
+        ``None`` for any other ramp."""
+        start, end = ends(self.topo, stub)
+        if start is None or end is not None:
+            return None
+        back = self.through_stubs(stub, False)
+        if back is None or not any(road_of(self.topo, k, True) == back
+                                   for k in self.kids(stub)):
+            return None
+        return back
+
+    def goes_round(self, ramp: str, loop: str, collectors: bool = False) -> bool:
         """Whether ``ramp`` is the outer connector of ``loop`` by their chains: it joins the
         two roads the loop joins the other way round, each reached directly or through
         stubs (:meth:`through_stubs`; Columbus's ``r11`` from I-70 West through the stub
         ``r1`` to I-270 North, round the loop ``r6`` from I-270 North through ``r8`` and
         ``r13`` to I-70 West; ``cloverleaf_cd``'s ``oA1`` round ``lB1``, both between
         collector-distributor roads). Unlike :meth:`goes_round_loop` it needs no road both
-        attach to themselves."""
+        attach to themselves. ``collectors``: as :meth:`through_stubs`."""
         if ramp == loop or not self.is_loop(loop) or self.is_loop(ramp):
             return False
-        a, b = self.through_stubs(ramp, False), self.through_stubs(ramp, True)
-        return a is not None and b is not None and a != b \
-            and (b, a) == (self.through_stubs(loop, False), self.through_stubs(loop, True))
+        a, b = self.through_stubs(ramp, False), self.through_stubs(ramp, True, collectors)
+        return a is not None and b is not None and a != b and (b, a) == (
+            self.through_stubs(loop, False), self.through_stubs(loop, True, collectors))
 
-    def is_outer_connector(self, ramp: str, loop: str) -> bool:
+    def is_outer_connector(self, ramp: str, loop: str, collectors: bool = False) -> bool:
         """Whether ``ramp`` goes round the loop ``loop`` as its outer connector: on a road
         both attach to (:meth:`goes_round_loop`) or by their chains through stubs
         (:meth:`goes_round`; Columbus's ``r11`` round ``r6``). The one rule the layout
         (:meth:`flyover.geometry.loop_room.LoopRoom.round_loops`) and sampling
-        (:func:`flyover.geometry.feasibility.round_loops`) share."""
-        if self.goes_round(ramp, loop):
+        (:func:`flyover.geometry.feasibility.round_loops`) share, but sampling also
+        counts a loop joining a collector road (``collectors``, :meth:`collects`:
+        Columbus's ``r2`` round ``r5``), which the layout does not fit round it yet (fitted
+        so, ``r5`` joined ``r13`` too near ``r13``'s start for ``r2`` to go round it on half
+        the workflow's sets: ``docs/attic/issue41r2round.diff``)."""
+        if self.goes_round(ramp, loop, collectors):
             return True
         on = [{e[0] for e in ends(self.topo, r) if e is not None and e[0] in self.roads}
               for r in (ramp, loop)]

@@ -290,14 +290,17 @@ def round_loops(topology: Topology, settings: LayoutSettings | None = None
     """Every outer connector of ``topology`` and the loop it goes round: the loop joining
     the same two roads the other way round, on a road they share or through stubs
     (:meth:`flyover.geometry.chains.Movements.is_outer_connector`, on the road layout of
-    :mod:`flyover.geometry.roads`, which does not depend on the sample); in ramp id order."""
+    :mod:`flyover.geometry.roads`, which does not depend on the sample), a loop joining a
+    collector road included (Columbus's ``r2`` round ``r5``: the real ``r2`` turns right
+    round the outside of ``r5``; with ``r2`` sampled wider, the workflow's Columbus sets
+    lost their one same-level conflict); in ramp id order."""
     st = settings or LayoutSettings()
     roads = layout_roads(topology, {}, st)
     moves = Movements(topology, roads)
     out = []
     for ramp in topology.ramps:
         for loop in topology.ramps:
-            if moves.is_outer_connector(ramp, loop):
+            if moves.is_outer_connector(ramp, loop, collectors=True):
                 out.append(RoundLoop(ramp, loop, moves.round_gap(ramp, loop, st.ramp_lane_width_m),
                                      st.fit.inf_reference_m))
     return tuple(out)

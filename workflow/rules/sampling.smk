@@ -20,7 +20,11 @@
 # 9: a level ramp between two windows the layout fixes (feasibility.shift_rooms: DC's
 #    continuation ramps r3 / r4) is sampled only radii its sideways shift can be built
 #    with at its road's lanes (no inf); the other classes unchanged (no such ramp)
-SAMPLING_VERSION = 9
+# 10: a loop joining a collector road (a stub splitting off its road's chain, one of whose
+#    branches leads back onto it: Columbus's r13) goes to that road for the outer-connector
+#    rule (chains.Movements.collects): Columbus's r2 is sampled wider than the loop r5 (75
+#    rows instead of 77); the layout is unchanged; the other classes unchanged (no such stub)
+SAMPLING_VERSION = 10
 
 
 rule sample_class:
