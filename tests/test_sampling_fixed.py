@@ -346,6 +346,9 @@ def test_columbus_connector_round_its_loop_through_stubs_is_sampled_wider():
     held = {(radius[k, "r11"], radius[k, "r6"]) for k in range(s.coverage.rows)}
     assert all(pair.allows(a, b) for a, b in held)
     assert any(b >= 40.0 for _, b in held)  # the loop still takes wide radii
+    # r2 goes round the loop r5, which joins the collector road r13 (Movements.collects)
+    r2 = next(p for p in round_loops(topo) if (p.connector, p.loop) == ("r2", "r5"))
+    assert all(r2.allows(radius[k, "r2"], radius[k, "r5"]) for k in range(s.coverage.rows))
 
 
 def test_fixed_features_lay_out_the_roads_once(monkeypatch, cloverleaf_cd):
