@@ -1123,3 +1123,61 @@ def test_every_real_interchange_is_laid_out_turning_as_its_ramps_really_turn(pat
             laid = wrap(roads[end[0]].heading - roads[start[0]].heading)
             if math.radians(20) < abs(real) < math.radians(160):
                 assert real * laid > 0, (topo.name, ramp, math.degrees(real), math.degrees(laid))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_r8_ends_where_the_loop_r5_has_room_before_i70():
+    """The workflow's Columbus set 54 (rule sample_class's feature sets, at its seed): the
+    loop r5 (30 m at 1 %, so as long as its 6 m climb: a wide loop) joins the collector road
+    r13, which r8 splits into with r2, r5's outer connector. r8 ended 118 m short of I-70
+    (fitted first, nothing held it back), r5 joined r13 26 m beyond I-70 and met r2. Now
+    r8 keeps out of where r5 and r2's way round it need (loop_room.collector_fences): it
+    ends short of that fence, r5 joins r13 before I-70, and every ramp meets its targets
+    on the first try."""
+    from flyover.geometry.loop_room import LoopRoom, collector_fences  # noqa: PLC0415
+
+    topo, lanes, feats = _columbus_set((4, 5, 5, 4), {
+        "r1": (280.0, 2.0), "r10": (30.0, 3.0), "r11": (150.0, 1.0), "r12": (math.inf, 4.0),
+        "r13": (40.0, 0.0), "r14": (100.0, 4.0), "r2": (40.0, 3.0), "r3": (210.0, 3.0),
+        "r4": (30.0, 4.0), "r5": (30.0, 1.0), "r6": (100.0, 1.0), "r7": (100.0, 5.0),
+        "r8": (math.inf, 3.0), "r9": (40.0, 5.0)})
+    state = LayoutState(topo, lanes, feats, LayoutSettings(), 0)
+    room = LoopRoom(state.moves, state.fitted, state.st, feats)
+    (fence,) = collector_fences(room, "r8")
+    i70 = state.roads["I70E"]
+    assert fence[4] < -(i70.half_width + 2 * 30.0 + 40.0)  # the loop's depth and r2's turn
+    assert collector_fences(room, "r13") == [] and collector_fences(room, "r1") == []
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=54,
+                           seed=1525740703)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert all(o.first_try_ok for o in ic.outcomes)
+    r8_end = out["r8"].fit.end_pose[:2]
+    assert float(r8_end[1]) <= fence[4]  # I-270 North runs north along x = 2: t is y
+    r5_end = out["r5"].fit.end_pose[:2]
+    assert float(r5_end[1]) < -i70.half_width  # r5 joins r13 before I-70
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_columbus_loop_r5_joins_r13_before_r13_passes_under_i70():
+    """The workflow's Columbus set 66 (at its seed): r13 starts 213 m short of I-70 and
+    passes under it; the loop r5's window on r13 was 40-85 % of r13, past I-70, so r5
+    (from I-70 East at 6.5 m) came down under I-70 to join r13 19 m beyond it and met
+    I-70 East. Now a loop joining a fitted ramp joins it on its own side of the road it
+    leaves (rails.in_quadrant): r5's window ends before r13's lane beside it comes within
+    crossing_margin_m of I-70's outer edge, and r5 meets its targets first time."""
+    topo, lanes, feats = _columbus_set((4, 3, 5, 4), {
+        "r1": (280.0, 3.0), "r10": (60.0, 1.0), "r11": (280.0, 3.0), "r12": (math.inf, 4.0),
+        "r13": (100.0, 0.0), "r14": (100.0, 1.0), "r2": (60.0, 4.0), "r3": (100.0, 1.0),
+        "r4": (30.0, 3.0), "r5": (40.0, 5.0), "r6": (210.0, 5.0), "r7": (210.0, 2.0),
+        "r8": (40.0, 3.0), "r9": (100.0, 1.0)})
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=66,
+                           seed=2681456240)
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r5"].first_try_ok
+    end = out["r5"].fit.spec.end
+    assert end.parent == "r13"
+    i70 = LayoutState(topo, lanes, feats, LayoutSettings(), 0).roads["I70E"]
+    edge = -(i70.half_width + LayoutSettings().crossing_margin_m)
+    assert float(out["r5"].fit.end_pose[1]) < edge  # I-70 runs east along y = -2
