@@ -21,10 +21,9 @@ import numpy as np
 
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fitted import FittedRamps
-from flyover.geometry.profile import loop_radius
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 
-__all__ = ["LoopRoom", "collector_fences", "round_need"]
+__all__ = ["LoopRoom", "round_need"]
 
 
 class LoopRoom:
@@ -62,10 +61,8 @@ class LoopRoom:
         window there begins beyond it
         (:meth:`flyover.geometry.rails.RoadWindows.road_rail`); its body may not reach
         back. For a stub whose child goes round a fitted loop (:meth:`connector_fences`),
-        where the stub must not go; for the first stub of a collector road, where it must
-        not go for a loop joining that road to fit before the crossing
-        (:func:`collector_fences`)."""
-        out = self.connector_fences(loop) + collector_fences(self, loop)
+        where the stub must not go."""
+        out = self.connector_fences(loop)
         for end, is_start in zip(ends(self.topo, loop), (True, False)):
             if end is None or end[0] not in self.roads:
                 continue
@@ -195,64 +192,6 @@ class LoopRoom:
         if first + 1.0 < new_hi < hi:
             return max(first, new_hi - span), new_hi
         return lo, hi
-
-
-def collector_fences(room: LoopRoom, stub: str) -> list[tuple[float, ...]]:
-    """Where the first stub of a collector road must not go (:class:`LoopRoom` fences),
-    so that a loop from the road ahead can join the collector road before the crossing
-    and the stub's other child, that loop's outer connector by their chains
-    (:meth:`flyover.geometry.chains.Movements.is_outer_connector` with ``collectors``),
-    can go round it. Columbus: ``r8`` leaves I-270 North and splits into ``r2`` (to I-70
-    East through ``r14``) and the collector road ``r13``, which the loop ``r5`` from I-70
-    East joins; the real ``r2`` turns round ``r5``. The fence lies on the stub's side of
-    its road, from the loop road's half width, the loop's radius (at least that of a loop
-    as long as its climb, :func:`flyover.geometry.profile.loop_radius`) and the
-    connector's way round it (:func:`round_need` at the connector's radius, out to twice
-    the loop's radius and the room between them) short of the loop road, onward. When
-    ``r8`` ended where it was fitted first, as little as 105-200 m short of I-70, ``r5``
-    had no room to join ``r13`` before I-70 and met ``r2`` or came down under I-70: 15
-    of the workflow's 75 Columbus sets missed ``r5`` on the first try. Empty for any
-    other ramp."""
-    moves, st = room.moves, room.st
-    start, end = ends(room.topo, stub)
-    if start is None or end is not None or start[0] not in room.roads:
-        return []
-    road, label = start
-    r = room.roads[road]
-    d = np.array([math.cos(r.heading), math.sin(r.heading)])
-    edge = r.lanes * st.lane_width_m
-    lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
-    kids = moves.kids(stub)
-    out = []
-    for cd in kids:
-        if moves.collects(cd) != road:
-            continue
-        for loop in moves.kids(cd):
-            a, b = ends(room.topo, loop)
-            if loop not in room.features or not moves.is_loop(loop) or b is None \
-                    or b[0] != cd or a is None or a[0] not in room.roads:
-                continue
-            q = room.roads[a[0]]
-            e = np.array([math.cos(q.heading), math.sin(q.heading)])
-            across = float(d[0] * e[1] - d[1] * e[0])
-            if abs(across) < 0.5:  # (nearly) along the stub's road: no crossing ahead
-                continue
-            rel = np.array(q.origin) - np.array(r.origin)
-            t_q = float(rel[0] * e[1] - rel[1] * e[0]) / across  # q's line, along road
-            fl = room.features[loop]
-            r_l = fl.radius_m if math.isfinite(fl.radius_m) else st.fit.inf_reference_m
-            r_l = loop_radius(r_l, abs(q.z - r.z), fl.slope_pct, st.fit.transition_m)
-            for conn in kids:
-                if conn not in room.features or not moves.is_outer_connector(conn, loop, True):
-                    continue
-                r_c = room.features[conn].radius_m
-                r_c = r_c if math.isfinite(r_c) else st.fit.inf_reference_m
-                c = moves.round_gap(conn, loop, st.ramp_lane_width_m)
-                need = q.half_width / abs(across) + r_l + float(
-                    round_need(np.array([2.0 * r_l + c]), r_c)[0])
-                out.append((r.origin[0], r.origin[1], d[0], d[1], t_q - need, t_q - need + 1e4,
-                            *lat))
-    return out
 
 
 def round_need(lateral_m: np.ndarray, radius_m: float) -> np.ndarray:

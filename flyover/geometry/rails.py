@@ -88,8 +88,8 @@ from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
 __all__ = ["AttachmentWindows", "LEVEL_GRADE", "LEVEL_RUN_M", "RampWindows", "RoadWindows",
-           "STRAIGHT_ON_RAD", "beyond_continuation", "clear_of_others", "in_quadrant",
-           "level_part", "room_beside"]
+           "STRAIGHT_ON_RAD", "beyond_continuation",
+           "clear_of_others", "level_part", "room_beside"]
 
 #: the largest grade of a parent ramp (a fraction) at which a child may attach to it
 LEVEL_GRADE = 0.003
@@ -341,8 +341,6 @@ class RampWindows:
             lo, hi = 0.15 * length, 0.6 * length
         else:
             lo, hi = self.reach_run(parent, ramp, label, 0.4 * length, 0.85 * length)
-            lo, hi = in_quadrant(self.moves, self.fitted, self.st, parent, ramp, off, width,
-                                 lo, hi)
         lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
                              lo, hi)
         for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
@@ -563,47 +561,6 @@ def clear_of_others(fitted: FittedRamps, st: LayoutSettings, road: str, ramp: st
         if best is None or key < best[0]:
             best = (key, cand)
     return best[1] if best else (lo, hi)
-
-
-def in_quadrant(moves: Movements, fitted: FittedRamps, st: LayoutSettings, parent: str,
-                ramp: str, off: float, width: float, lo: float, hi: float
-                ) -> tuple[float, float]:
-    """``lo..hi`` (stations on the fitted ``parent``) of a loop joining it, cut to where the
-    loop's lane beside the parent lies on the loop's side of the road the loop leaves,
-    ``crossing_margin_m`` off that expressway's outer edge: a loop turns three quarters
-    round within its quadrant and joins there, before its parent passes under (over) the
-    road it came from. Of the runs of such stations (within 5-95 % of the parent) the one
-    overlapping ``lo..hi`` most, else the longest; unchanged for any other child, a loop
-    leaving a ramp, when every station of ``lo..hi`` lies so or none does for
-    :data:`LEVEL_RUN_M`. Columbus's loop ``r5`` (from I-70 East) had its window on the
-    collector road ``r13`` at 40-85 % of it, past where ``r13`` passes under I-70 on most
-    sets (workflow set 66: ``r13`` from 213 m short of I-70, ``r5`` joining 19 m beyond
-    it): ``r5`` came down under I-70 to join it and met I-70 East."""
-    if not moves.is_loop(ramp):
-        return lo, hi
-    road = ends(moves.topo, ramp)[0]
-    if road is None or road[0] not in moves.roads:
-        return lo, hi
-    q = moves.roads[road[0]]
-    sgn = -1.0 if road[1].side == "right" else 1.0
-    stn = fitted.stations[parent]
-    s, xy, head = stn["s"], stn["xy"], stn["heading"]
-    left = np.stack([-np.sin(head), np.cos(head)], -1)
-    n = np.array([-np.sin(q.heading), np.cos(q.heading)])
-    side = np.ones(len(s), bool)
-    for k in (off - width, off):  # both edges of the loop's lane
-        lat = (xy + k * left - np.array(q.origin)) @ n
-        side &= sgn * lat > q.half_width + st.crossing_margin_m
-    if side[(s >= lo) & (s <= hi)].all():
-        return lo, hi
-    ok = side & (s >= 0.05 * s[-1]) & (s <= 0.95 * s[-1])
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-    runs = [(float(s[a]), float(s[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
-    runs = [r for r in runs if r[1] - r[0] >= LEVEL_RUN_M]
-    if not runs:
-        return lo, hi
-    a, b = max(runs, key=lambda r: (max(0.0, min(hi, r[1]) - max(lo, r[0])), r[1] - r[0]))
-    return (max(a, lo), min(b, hi)) if min(b, hi) - max(a, lo) >= LEVEL_RUN_M else (a, b)
 
 
 def level_part(fitted: FittedRamps, parent: str, lo: float, hi: float,

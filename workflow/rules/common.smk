@@ -288,11 +288,7 @@ def class_tables(stage):
 #     attaches to its road within 1.5 x its turn and its climb to that ramp, one after
 #     the other, not the longer of them (RampSpecs.need_m; Columbus's r7 onto r3; of the
 #     catalog, trumpet changes in geometry_bytes 3)
-# 44: the first stub of a collector road ends short of where a loop joining that road and
-#     the loop's outer connector need room before the crossing (loop_room.collector_fences:
-#     Columbus's r8, r5, r2), and a loop joining a fitted ramp joins it on its own side of
-#     the road it leaves (rails.in_quadrant: r5 onto r13 before I-70); catalog unchanged
-GEOMETRY_VERSION = 44
+GEOMETRY_VERSION = 43
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
