@@ -1123,3 +1123,35 @@ def test_every_real_interchange_is_laid_out_turning_as_its_ramps_really_turn(pat
             laid = wrap(roads[end[0]].heading - roads[start[0]].heading)
             if math.radians(20) < abs(real) < math.radians(160):
                 assert real * laid > 0, (topo.name, ramp, math.degrees(real), math.degrees(laid))
+
+
+_SET_15 = ((5, 4, 3, 3), {
+    "r1": (60.0, 1.0), "r10": (60.0, 5.0), "r11": (60.0, 1.0), "r12": (math.inf, 1.0),
+    "r13": (30.0, 0.0), "r14": (280.0, 1.0), "r2": (210.0, 3.0), "r3": (60.0, 5.0),
+    "r4": (280.0, 3.0), "r5": (150.0, 5.0), "r6": (40.0, 1.0), "r7": (100.0, 4.0),
+    "r8": (math.inf, 2.0), "r9": (60.0, 2.0)})
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+@pytest.mark.parametrize("swap", [True, False])
+def test_columbus_r2_makes_way_round_the_loop_r5_fitted_first(swap, monkeypatch):
+    """The workflow's Columbus set 15 (its sample seed): r2 (210 m / 3 %), fitted before
+    the loop r5 (150 m / 5 %), ran across the quadrant the loop needs; r5 met it (one
+    sample, under it 3.9 m apart in height) and r2 refitted round that bent curve met it
+    again. Now r2 is taken out, r5 fitted without it and r2 fitted again round it
+    (build._swapped): both first try, no conflict, r2 round the loop, not over it. With
+    the swap off r5 misses as before."""
+    from flyover.geometry import build  # noqa: PLC0415
+    from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
+
+    if not swap:
+        monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
+    topo, lanes, feats = _columbus_set(*_SET_15)
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=15,
+                           seed=1234895117, settings=LayoutSettings(rebuilds=0))
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r5"].first_try_ok is swap
+    if swap:
+        assert out["r2"].first_try_ok and out["r2"].fit.conflicts == 0
+        assert not [c for c in ramp_crossings(ic.geometry) if {c.ramp, c.other} == {"r2", "r5"}]

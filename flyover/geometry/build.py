@@ -40,7 +40,11 @@ and the ramps already fitted:
    reroute): each ramp it meets, if nothing is attached to it yet and it is
    not its parent, is fitted again on its own targets with the new ramp's
    curve as an obstacle and kept only if it meets them without conflict;
-   then the new ramp is counted again and, if it still conflicts, refitted;
+   then the new ramp is counted again and, if it still conflicts, refitted; if it
+   still misses its targets, the order is swapped (:func:`_swapped`): the ramps that
+   can move (those it meets; with none met, all) are taken out, the new ramp is fitted
+   without them, and those it then meets are fitted again round it (round a loop with
+   the loop kept out at every height); all are kept only if all meet their targets;
 4. a ramp that misses its targets after all that is resampled (Algorithm 1)
    through ``resampler``; what still misses is recorded with the reason;
 5. an interchange in which a ramp still meets something at its level is
@@ -371,9 +375,9 @@ def _build_once(topology: Topology, lanes: Mapping[str, int],
 
 
 def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
-               outcomes: list[RampOutcome], spent: _Spent) -> RampFit:
+               outcomes: list[RampOutcome], spent: _Spent, swap: bool = True) -> RampFit:
     """Steps 0–3 of the module's list on the sampled targets: the fit "the first try" is
-    counted on."""
+    counted on (``swap``: with step 3's second half, :func:`_swapped`)."""
     spec = b.spec(ramp, feat)
     built = _collector(b, ramp, spec) if b.moves.same_road(ramp) else None
     fit = built if built is not None and built.ok else None
@@ -422,8 +426,73 @@ def _first_try(b: LayoutState, ramp: str, feat: RampFeatures, rseed: int,
         fit = held
     if fit.conflicts:  # make way: refit the ramps it meets, then it again
         fit = spent(_reroute(b, ramp, fit, rseed, outcomes))
+    if swap and not fit.ok:  # still: fit it first, then the ramps it meets
+        fit = _swapped(b, ramp, feat, fit, rseed, outcomes, spent)
     if not fit.ok and not _systematic(fit):
         fit = _moved_run(b, ramp, feat, fit, rseed, outcomes, spent)
+    return fit
+
+
+def _swapped(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rseed: int,
+             outcomes: list[RampOutcome], spent: _Spent) -> RampFit:
+    """Step 3's second half: the order swapped. ``ramp`` still meets fitted ramps at its
+    level after they made way round its curve (:func:`_reroute`, which refits them round a
+    curve bent to avoid them), or it misses its targets with none met (bent or steepened
+    to keep off them). The fitted ramps that can move (nothing attached to them yet, not
+    its parents), those it meets or, with none met, all of them, are taken out; ``ramp``
+    is fitted as on its first try without them (another seed); those its new curve meets
+    are fitted again, each as on its own first try on its own targets, round the new
+    curve (round a loop first with the loop kept out at every height, as an outer
+    connector: :func:`_round_fit`), the others put back. All are kept only if every one
+    meets its targets with no conflict; else everything is put back as it was (``fit``
+    returned)."""
+    if fit.ok or _systematic(fit):
+        return fit
+    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
+    used = _attached_to(b)
+    met = conflicts_with(fit, b.obstacles(), b.st.fit) if fit.conflicts else b.fits
+    movable = [m for m in b.fits if m in met and m not in parents and m not in used]
+    if not movable:
+        return fit
+    kept, shifts, before = b.fitted.saved(), dict(b.fitted.run_shift), list(outcomes)
+    olds = {m: b.fits[m] for m in movable}
+    for m in movable:
+        b.unrecord(m)
+    mine = _Spent()
+    new = _first_try(b, ramp, feat, rseed + 19, outcomes, mine, swap=False)
+    refits = {}
+    if new.ok and not fit.conflicts:  # back, in their order, all it does not meet
+        for m in movable:
+            b.record(m, olds[m])
+        hit = conflicts_with(new, b.obstacles(), b.st.fit)
+        movable = [m for m in movable if m in hit]
+        for m in movable:
+            b.unrecord(m)
+    if new.ok:
+        b.record(ramp, new)
+        for k, m in enumerate(movable):
+            old = olds[m].spec
+            targets = RampFeatures(old.target_radius_m, old.target_slope_pct)
+            again = _round_fit(b, m, b.spec(m, targets), frozenset({ramp}), rseed + 29 + k,
+                               mine) if b.moves.is_loop(ramp) else None
+            if again is None:
+                again = _first_try(b, m, targets, rseed + 23 + k, outcomes, mine, swap=False)
+            if not again.ok:
+                break
+            b.record(m, again)
+            refits[m] = again
+        b.unrecord(ramp)
+    spent.evals, spent.secs = spent.evals + mine.evals, spent.secs + mine.secs
+    if new.ok and len(refits) == len(movable):
+        by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
+        for m, again in refits.items():
+            o = outcomes[by_ramp[m]]
+            outcomes[by_ramp[m]] = replace(o, fit=again, infeasible="")
+        return new
+    b.fitted.restore(kept)  # as they were, in their order
+    b.fitted.run_shift.clear()
+    b.fitted.run_shift.update(shifts)
+    outcomes[:] = before
     return fit
 
 
@@ -586,10 +655,12 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
     parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
     used = _attached_to(b)
     met = conflicts_with(fit, b.obstacles(), st.fit)
-    movable = [m for m in met if m in b.fits and m not in parents and m not in used]
+    by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
+    # (a ramp being swapped in, :func:`_swapped`, is fitted but has no outcome yet: it stays)
+    movable = [m for m in met
+               if m in b.fits and m not in parents and m not in used and m in by_ramp]
     if not movable:
         return fit, evals, secs
-    by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
     for k, other in enumerate(movable):
         old = b.fits[other]
         b.unrecord(other)

@@ -288,7 +288,11 @@ def class_tables(stage):
 #     attaches to its road within 1.5 x its turn and its climb to that ramp, one after
 #     the other, not the longer of them (RampSpecs.need_m; Columbus's r7 onto r3; of the
 #     catalog, trumpet changes in geometry_bytes 3)
-GEOMETRY_VERSION = 43
+# 44: a ramp that still misses its first try after rip-up and reroute is fitted again
+#     without the fitted ramps that can move (those it meets; with none met, all), and
+#     those its new curve meets are fitted again round it, kept only if all then meet
+#     their targets (build._swapped: Columbus's r2 round the loop r5; stack4's lB2)
+GEOMETRY_VERSION = 44
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
