@@ -1125,11 +1125,23 @@ def test_every_real_interchange_is_laid_out_turning_as_its_ramps_really_turn(pat
                 assert real * laid > 0, (topo.name, ramp, math.degrees(real), math.degrees(laid))
 
 
+
+_SET_14 = ((5, 3, 4, 4), {
+    "r1": (280.0, 2.0), "r10": (150.0, 2.0), "r11": (280.0, 4.0), "r12": (math.inf, 2.0),
+    "r13": (150.0, 0.0), "r14": (210.0, 5.0), "r2": (100.0, 3.0), "r3": (280.0, 1.0),
+    "r4": (150.0, 4.0), "r5": (40.0, 4.0), "r6": (210.0, 4.0), "r7": (210.0, 5.0),
+    "r8": (150.0, 2.0), "r9": (60.0, 3.0)})
 _SET_15 = ((5, 4, 3, 3), {
     "r1": (60.0, 1.0), "r10": (60.0, 5.0), "r11": (60.0, 1.0), "r12": (math.inf, 1.0),
     "r13": (30.0, 0.0), "r14": (280.0, 1.0), "r2": (210.0, 3.0), "r3": (60.0, 5.0),
     "r4": (280.0, 3.0), "r5": (150.0, 5.0), "r6": (40.0, 1.0), "r7": (100.0, 4.0),
     "r8": (math.inf, 2.0), "r9": (60.0, 2.0)})
+
+
+def _without_swap(monkeypatch):
+    from flyover.geometry import build  # noqa: PLC0415
+
+    monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
 
 
 @pytest.mark.slow
@@ -1138,15 +1150,14 @@ _SET_15 = ((5, 4, 3, 3), {
 def test_columbus_r2_makes_way_round_the_loop_r5_fitted_first(swap, monkeypatch):
     """The workflow's Columbus set 15 (its sample seed): r2 (210 m / 3 %), fitted before
     the loop r5 (150 m / 5 %), ran across the quadrant the loop needs; r5 met it (one
-    sample, under it 3.9 m apart in height) and r2 refitted round that bent curve met it
-    again. Now r2 is taken out, r5 fitted without it and r2 fitted again round it
+    sample: r5, still at I-70's 6.5 m, 2.6 m above r2 climbing from the fork) and r2
+    refitted round that bent curve met it again. Now r2 is taken out, r5 fitted without it and r2 fitted again round it
     (build._swapped): both first try, no conflict, r2 round the loop, not over it. With
     the swap off r5 misses as before."""
-    from flyover.geometry import build  # noqa: PLC0415
     from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
 
     if not swap:
-        monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
+        _without_swap(monkeypatch)
     topo, lanes, feats = _columbus_set(*_SET_15)
     ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=15,
                            seed=1234895117, settings=LayoutSettings(rebuilds=0))
@@ -1155,3 +1166,24 @@ def test_columbus_r2_makes_way_round_the_loop_r5_fitted_first(swap, monkeypatch)
     if swap:
         assert out["r2"].first_try_ok and out["r2"].fit.conflicts == 0
         assert not [c for c in ramp_crossings(ic.geometry) if {c.ramp, c.other} == {"r2", "r5"}]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+@pytest.mark.parametrize("swap", [True, False])
+def test_columbus_r5_missing_with_nothing_met_is_fitted_before_what_can_move(swap,
+                                                                             monkeypatch):
+    """The workflow's Columbus set 14 (its sample seed): the loop r5 (40 m / 4 %) met
+    nothing but came out 28 m tight at a point, bent to keep off ramps fitted before it.
+    Now, missing with nothing met, it is fitted without every fitted ramp that can move,
+    and those it then meets are fitted again round it (build._swapped): every ramp first
+    try and no conflict. With the swap off r5 misses as before."""
+    if not swap:
+        _without_swap(monkeypatch)
+    topo, lanes, feats = _columbus_set(*_SET_14)
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=14,
+                           seed=1050423707, settings=LayoutSettings(rebuilds=0))
+    out = {o.ramp: o for o in ic.outcomes}
+    assert out["r5"].first_try_ok is swap
+    if swap:
+        assert all(o.first_try_ok and o.fit.conflicts == 0 for o in out.values())
