@@ -541,8 +541,13 @@ def test_a_ramp_meeting_a_fitted_one_at_its_level_makes_it_reroute(monkeypatch):
     ic = build_interchange(t, lanes, feats, seed=2735729615, settings=unbounded)
     assert calls == [("rR", calls[0][1], ["rL"])] and calls[0][1] > 0
     assert all(o.fit.ok and o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
-    # without it rR keeps its conflict with rL, and says so
+    # without it, the swap (build._swapped: rR fitted without rL, rL again round it) clears
+    # the conflict on its own; without both rR keeps its conflict with rL, and says so
     monkeypatch.setattr(build, "_reroute", lambda b, ramp, fit, seed, outcomes: (fit, 0, 0.0))
+    ic = build_interchange(t, lanes, feats, seed=2735729615,
+                           settings=replace(unbounded, rebuilds=0))
+    assert all(o.fit.conflicts == 0 and o.first_try_ok for o in ic.outcomes)
+    monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
     ic = build_interchange(t, lanes, feats, seed=2735729615,
                            settings=replace(unbounded, rebuilds=0))
     r_r = next(o for o in ic.outcomes if o.ramp == "rR")
@@ -564,6 +569,8 @@ def test_a_ramp_missing_its_targets_is_refitted_with_leads_then_one_more_piece_t
         return real(spec, obstacles, settings, seed=seed, init=init)
 
     monkeypatch.setattr(build, "fit_ramp", spy)
+    # (the swap, build._swapped, then fits it once more as on its first try, another seed)
+    monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
     build_interchange(t, {r: 3 for r in t.roads}, feats, seed=1,
                       settings=LayoutSettings(restarts=4, max_resamples=0))
     n = seen[0][0]
