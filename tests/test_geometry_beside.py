@@ -65,3 +65,17 @@ def test_j1_r2_comes_in_beside_r3_on_the_first_try(sample, seed, feats, lanes):
     for o in ic.outcomes:
         assert o.first_try_ok and o.fit.conflicts == 0, (o.ramp, o.fit.min_radius_m,
                                                          o.fit.conflicts)
+
+
+def test_a_run_moved_along_its_road_is_put_back_with_the_fits():
+    # build._moved_run and build._swapped put the build back as it was when what they
+    # tried does not hold: the runs moved for a child (run_shift) go back with the fits
+    b, _ = _state("j1")
+    b.fitted.run_shift["r1"] = 75.0
+    kept = b.fitted.saved()
+    b.fitted.run_shift["r1"] = 150.0
+    b.fitted.run_shift["r3"] = 30.0
+    b.fitted.fits["r2"] = None  # a stand-in fit: restore only has to forget it
+    b.fitted.restore(kept)
+    assert b.fitted.run_shift == {"r1": 75.0}
+    assert "r2" not in b.fitted.fits

@@ -448,13 +448,11 @@ def _swapped(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rseed:
     returned)."""
     if fit.ok or _systematic(fit):
         return fit
-    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
-    used = _attached_to(b)
     met = conflicts_with(fit, b.obstacles(), b.st.fit) if fit.conflicts else b.fits
-    movable = [m for m in b.fits if m in met and m not in parents and m not in used]
+    movable = _movable(b, fit, [m for m in b.fits if m in met])  # in fit order
     if not movable:
         return fit
-    kept, shifts, before = b.fitted.saved(), dict(b.fitted.run_shift), list(outcomes)
+    kept, before = b.fitted.saved(), list(outcomes)
     olds = {m: b.fits[m] for m in movable}
     for m in movable:
         b.unrecord(m)
@@ -490,8 +488,6 @@ def _swapped(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rseed:
             outcomes[by_ramp[m]] = replace(o, fit=again, infeasible="")
         return new
     b.fitted.restore(kept)  # as they were, in their order
-    b.fitted.run_shift.clear()
-    b.fitted.run_shift.update(shifts)
     outcomes[:] = before
     return fit
 
@@ -547,9 +543,8 @@ def _moved_run(b: LayoutState, ramp: str, feat: RampFeatures, fit: RampFit, rsee
                 outcomes[i] = replace(o, fit=new, evaluations=o.evaluations + mine.evals,
                                       seconds=o.seconds + mine.secs)
                 return again
-        b.fitted.restore(kept)  # as they were, in their order
+        b.fitted.restore(kept)  # as they were, in their order (its run not shifted)
     spent.evals, spent.secs = spent.evals + mine.evals, spent.secs + mine.secs
-    del b.fitted.run_shift[parent]
     return fit
 
 
@@ -652,13 +647,10 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
     fit and the effort spent."""
     st = b.st
     evals, secs = 0, 0.0
-    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
-    used = _attached_to(b)
     met = conflicts_with(fit, b.obstacles(), st.fit)
     by_ramp = {o.ramp: i for i, o in enumerate(outcomes)}
     # (a ramp being swapped in, :func:`_swapped`, is fitted but has no outcome yet: it stays)
-    movable = [m for m in met
-               if m in b.fits and m not in parents and m not in used and m in by_ramp]
+    movable = [m for m in _movable(b, fit, met) if m in by_ramp]  # in the order met
     if not movable:
         return fit, evals, secs
     for k, other in enumerate(movable):
@@ -682,6 +674,14 @@ def _reroute(b: LayoutState, ramp: str, fit: RampFit, seed: int,
         evals, secs = evals + e, secs + t
         fit = min([fit, again], key=lambda f: (f.conflicts, not f.ok))
     return fit, evals, secs
+
+
+def _movable(b: LayoutState, fit: RampFit, names) -> list[str]:
+    """Those of ``names`` (in their order) that may be fitted again to make way for the
+    ramp of ``fit``: fitted, not its parents, nothing attached to them yet."""
+    parents = {r.parent for r in (fit.spec.start, fit.spec.end) if r is not None}
+    used = _attached_to(b)
+    return [m for m in names if m in b.fits and m not in parents and m not in used]
 
 
 def _attached_to(b: LayoutState) -> set[str]:

@@ -112,15 +112,17 @@ class FittedRamps:
             self.attached[parent] = [a for a in items if a[3] != ramp]
 
     def saved(self) -> tuple:
-        """The fits, stations and attachments as they are now, for :meth:`restore`."""
+        """The fits, stations, attachments and run shifts as they are now, for
+        :meth:`restore`."""
         return (dict(self.fits), dict(self.stations),
-                {k: list(v) for k, v in self.attached.items()})
+                {k: list(v) for k, v in self.attached.items()}, dict(self.run_shift))
 
     def restore(self, saved: tuple) -> None:
         """Put back what :meth:`saved` returned, in its order (a ramp recorded again with
         :meth:`record` would be attached last, and later ramps read attachments in order)."""
-        fits, stations, attached = saved
-        for now, then in ((self.fits, fits), (self.stations, stations)):
+        fits, stations, attached, shifts = saved
+        for now, then in ((self.fits, fits), (self.stations, stations),
+                          (self.run_shift, shifts)):
             now.clear()
             now.update(then)
         self.attached.clear()
