@@ -830,7 +830,7 @@ def test_columbus_r7_start_window_holds_its_climb_to_r3s_plateau(columbus_set_26
 
 @pytest.mark.slow
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
-def test_columbus_r7_start_window_holds_its_turn_and_its_climb_to_r3():
+def test_columbus_r7_start_window_holds_its_turn_and_its_climb_to_r3(monkeypatch):
     """Drawn set 15 of benchmarks/geometry.py --osm (its seed): r7 (210 m / 4 %) leaves
     I-70 East at 6.5 m, turns 2.24 rad and joins the flyover r3 along it on its 19.5 m
     plateau. Its start window reached back the larger of its turn (2.24 x 210 m = 471 m)
@@ -839,7 +839,9 @@ def test_columbus_r7_start_window_holds_its_turn_and_its_climb_to_r3():
     (the benchmark's first build); the one from 857 m back held 195.9 m in 2,264 m. A
     ramp joining a fitted ramp along it, neither a loop nor straight-on, now counts both,
     one after the other: 38.25 + 1.5 x (471 + 365 + 80) = 1,412 m back, and r7 is first
-    try."""
+    try. (Built with r2 fitted before r5, :func:`_before_collector_round`, as found: with
+    r2 round r5 this set's window reaches 1,297 m back, r7 still first try.)"""
+    _before_collector_round(monkeypatch)
     out = _columbus_outcomes((3, 5, 5, 5), {
         "r1": (280.0, 1.0), "r10": (30.0, 3.0), "r11": (210.0, 4.0), "r12": (math.inf, 5.0),
         "r13": (150.0, 0.0), "r14": (60.0, 5.0), "r2": (100.0, 5.0), "r3": (30.0, 1.0),
@@ -959,8 +961,12 @@ def test_columbus_r11_is_not_restarted_in_the_narrow_slot_it_grazes(monkeypatch)
     twice as wide then took it first time. On 32 drawn sets the lifts and restarts in
     the narrow slot never met the fences (the third seed did once, set 25), nor in the
     two slots over the run's first gap_m (sets 14, 18): only the wide slot to the run's
-    end (sets 2, 8, 16, 30) and the plain spec keep them (build._round_fit)."""
+    end (sets 2, 8, 16, 30) and the plain spec keep them (build._round_fit). (Built with
+    r2 fitted before r5, :func:`_before_collector_round`, as found: with r2 round r5,
+    r13 is longer and r12 at inf / 1 % misses its slope on this set.)"""
     import flyover.geometry.build as build  # noqa: PLC0415
+
+    _before_collector_round(monkeypatch)
 
     calls = []
 
@@ -1008,14 +1014,19 @@ def test_columbus_r1_a_stub_is_not_restarted_round_its_loop(monkeypatch):
 
 @pytest.mark.slow
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
-def test_columbus_r2_climbing_further_than_its_shortest_path_detours_for_its_climb():
+def test_columbus_r2_climbing_further_than_its_shortest_path_detours_for_its_climb(
+        monkeypatch):
     """Drawn set 29 of benchmarks/geometry.py --osm (its seed): r2 (60 m / 1 %, from r8's
     free end at 0.5 m to r14's at 12 m, 626 m apart at least) needs 1,190 m to climb
     11.5 m at 1 %; every restart started near the shortest path and came out 629-825 m
     long at 1.46-1.95 % with no conflict (or with one), so it missed its first try. Now a
     search started from detours as long as its climb (build._detours) meets its targets,
-    no longer than twice its climb (build.DETOUR_LENGTH_RATIO)."""
+    no longer than twice its climb (build.DETOUR_LENGTH_RATIO). (Built with r2 fitted
+    before r5, :func:`_before_collector_round`, as found: round r5 it is first try at
+    1,128 m, its ends elsewhere.)"""
     from flyover.osm import read_osm_topologies  # noqa: PLC0415
+
+    _before_collector_round(monkeypatch)
 
     topo = next(t for t in read_osm_topologies(COLUMBUS) if t.ramps)
     lanes = dict(zip(("I270N", "I270S", "I70E", "I70W"), (4, 4, 5, 5)))
@@ -1144,6 +1155,15 @@ def _without_swap(monkeypatch):
     monkeypatch.setattr(build, "_swapped", lambda b, ramp, feat, fit, *a: fit)
 
 
+def _before_collector_round(monkeypatch):
+    """The layout of GEOMETRY_VERSION 44 (bytes checked): Columbus's r2 fitted before the
+    loop r5 and not round it, r8 and r14 where they needed to be for themselves, r5's
+    window on r13 at 40-85 % of it. Tests that pin a mechanism on a build found so."""
+    from flyover.geometry.chains import Movements  # noqa: PLC0415
+
+    monkeypatch.setattr(Movements, "round_by_collector", lambda self, ramp, loop: False)
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
 @pytest.mark.parametrize("swap", [True, False])
@@ -1156,6 +1176,7 @@ def test_columbus_r2_makes_way_round_the_loop_r5_fitted_first(swap, monkeypatch)
     the swap off r5 misses as before."""
     from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
 
+    _before_collector_round(monkeypatch)  # the layout the swap was found on
     if not swap:
         _without_swap(monkeypatch)
     topo, lanes, feats = _columbus_set(*_SET_15)
@@ -1178,6 +1199,7 @@ def test_columbus_r5_missing_with_nothing_met_is_fitted_before_what_can_move(swa
     Now, missing with nothing met, it is fitted without every fitted ramp that can move,
     and those it then meets are fitted again round it (build._swapped): every ramp first
     try and no conflict. With the swap off r5 misses as before."""
+    _before_collector_round(monkeypatch)  # the layout the swap was found on
     if not swap:
         _without_swap(monkeypatch)
     topo, lanes, feats = _columbus_set(*_SET_14)
@@ -1187,3 +1209,80 @@ def test_columbus_r5_missing_with_nothing_met_is_fitted_before_what_can_move(swa
     assert out["r5"].first_try_ok is swap
     if swap:
         assert all(o.first_try_ok and o.fit.conflicts == 0 for o in out.values())
+
+
+_SET_25 = ((5, 3, 5, 4), {
+    "r1": (60.0, 5.0), "r10": (30.0, 2.0), "r11": (40.0, 3.0), "r12": (math.inf, 3.0),
+    "r13": (math.inf, 0.0), "r14": (math.inf, 1.0), "r2": (210.0, 4.0), "r3": (30.0, 5.0),
+    "r4": (30.0, 2.0), "r5": (150.0, 3.0), "r6": (30.0, 4.0), "r7": (60.0, 3.0),
+    "r8": (150.0, 4.0), "r9": (280.0, 2.0)})
+
+
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_only_columbus_r2_goes_round_a_loop_by_a_collector_road_and_its_stubs_keep_out():
+    """Of the catalog and every interchange of the shared extracts, only Columbus's r2
+    goes round a loop (r5) joining a collector road (r13); the stubs it leaves and joins,
+    r8 and r14, keep their free ends beyond the loop's reach from the crossing, farther
+    for a wider loop and for a wider connector."""
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+    from flyover.osm import read_osm_topologies  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    topos = list(catalog_topologies().items()) + [
+        (f"{p.stem[:2]}:{k}", t) for p in sorted(OSM_DIR.glob("*.osm"))
+        for k, t in enumerate(t for t in read_osm_topologies(p) if t.ramps)]
+    found = {}
+    for name, t in topos:
+        b = LayoutState(t, {}, {r: RampFeatures(150.0, 4.0) for r in t.ramps},
+                        LayoutSettings(), 0)
+        pairs = [(c, k) for c in t.ramps for k in t.ramps if b.moves.round_by_collector(c, k)]
+        reach = {r: b.windows.loops.quadrant_reach(r) for r in t.ramps}
+        found[name] = (pairs, sorted(r for r, q in reach.items() if q is not None))
+    assert {n: v for n, v in found.items() if v != ([], [])} == {
+        "09:0": ([("r2", "r5")], ["r14", "r8"])}
+
+    topo, lanes, feats = _columbus_set(*_SET_25)
+
+    def reach(**change):
+        f = dict(feats, **{r: RampFeatures(*v) for r, v in change.items()})
+        loops = LayoutState(topo, lanes, f, LayoutSettings(), 0).windows.loops
+        (_, _, _, t8, r8), (_, _, _, t14, r14) = (loops.quadrant_reach(r) for r in ("r8", "r14"))
+        assert abs(t8) < 5.0 and abs(t14) < 5.0  # from the crossing, on both roads
+        return r8, r14
+
+    r8, r14 = reach()
+    assert r8 == pytest.approx(r14, abs=5.0) and 600.0 < r8 < 1_000.0
+    assert reach(r5=(210.0, 3.0))[0] > r8 + 100.0  # a wider loop
+    assert reach(r2=(280.0, 4.0))[0] > r8 + 20.0  # a wider connector
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+@pytest.mark.parametrize("quadrant", [True, False])
+def test_columbus_r2_goes_round_the_loop_r5_in_a_quadrant_laid_out_for_both(quadrant,
+                                                                           monkeypatch):
+    """The workflow's Columbus set 25 (its sample seed): the loop r5 (150 m / 3 %) left
+    I-70 East 400 m past the crossing and swept 610 m along it, past r14's free end; r2
+    (210 m / 4 %), fitted before it, ran straight across the quadrant from r8's free end
+    to r14's and passed over r5 twice. Now r5 is fitted first, joining r13 near the
+    crossing; r8 and r14 end beyond the loop's reach, and r2 is fitted round r5
+    (Movements.round_by_collector): every ramp first try, r2 not over nor under r5. With
+    that off r2 crosses r5 as before."""
+    from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
+    from flyover.geometry.state import LayoutState  # noqa: PLC0415
+
+    if not quadrant:
+        _before_collector_round(monkeypatch)
+    topo, lanes, feats = _columbus_set(*_SET_25)
+    ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=25,
+                           seed=1656115918)
+    crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
+    assert (frozenset(("r2", "r5")) not in crossed) is quadrant
+    if quadrant:
+        assert all(o.first_try_ok and o.fit.conflicts == 0 for o in ic.outcomes)
+        need = LayoutState(topo, lanes, feats, LayoutSettings(), 0).windows.loops \
+            .quadrant_reach("r8")[4]
+        plan = {r.id: r.plan for r in ic.geometry.ramps}
+        r8_end = np.asarray(plan["r8"][-1].p)[-1]  # I-270 North runs north at x = 2
+        r14_start = np.asarray(plan["r14"][0].p)[0]  # I-70 East runs east at y = -2
+        assert r8_end[1] <= -need + 2.0 and r14_start[0] >= need - 2.0

@@ -66,3 +66,15 @@ def test_level_ends_give_the_profile_the_search_assumes():
     assert np.allclose(z, heights(s[None], np.array([800.0]), 0.0, 13.0, 6.5, 0.04, 40.0)[0],
                        atol=1e-9)
     assert polys == elevation_polys(800.0, 0.0, 13.0, 6.5, 0.04, 40.0, 0.0, 0.0)
+
+
+def test_a_climb_of_nanometres_is_none():
+    # Columbus's r13 (workflow set 26) left r8 at a grade of 1.6e-5 and so ended 5.3e-9 m
+    # under the plateau that made: the climb down to its end height was two pieces
+    # 5e-9 m long with c = -+9.4e7, and its grade read at its end 2e6 pp (in the .xodr too)
+    length, g0 = 1245.9284659518212, 1.628049073308413e-05
+    polys = elevation_polys(length, 0.5, 0.5, 0.5, 0.01, 40.0, g0=g0)
+    assert max(abs(p.c) for p in polys) < 1.0
+    s = np.linspace(0.0, length, 5001)
+    z, g = evaluate_polys(polys, s)
+    assert np.abs(z - 0.5).max() < 1e-5 and np.abs(g).max() < 1e-4

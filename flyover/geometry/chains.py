@@ -276,6 +276,17 @@ class Movements:
         return a is not None and b is not None and a != b and (b, a) == (
             self.through_stubs(loop, False), self.through_stubs(loop, True, collectors))
 
+    def round_by_collector(self, ramp: str, loop: str) -> bool:
+        """Whether ``ramp`` is the outer connector of ``loop`` only where a loop joining a
+        collector road counts as joining the road it collects for (:meth:`goes_round` with
+        ``collectors``; Columbus's ``r2`` round ``r5``, which joins ``r13``): the layout
+        then fits the loop first, in the corner of its quadrant
+        (:meth:`flyover.geometry.loop_room.LoopRoom.near_crossing`), keeps the stubs the
+        connector leaves and joins beyond its reach
+        (:meth:`flyover.geometry.loop_room.LoopRoom.quadrant_fences`) and fits the
+        connector round it."""
+        return self.goes_round(ramp, loop, True) and not self.goes_round(ramp, loop)
+
     def is_outer_connector(self, ramp: str, loop: str, collectors: bool = False) -> bool:
         """Whether ``ramp`` goes round the loop ``loop`` as its outer connector: on a road
         both attach to (:meth:`goes_round_loop`) or by their chains through stubs

@@ -25,6 +25,9 @@ from flyover.geometry.settings import LayoutSettings, RampFeatures
 
 __all__ = ["LoopRoom", "round_need"]
 
+#: how much wider than its radius a fitted loop turns (a Bezier loop is no circle)
+LOOP_SPREAD = 1.3
+
 
 class LoopRoom:
     """Room between loops and the ramps that go round them, given what is fitted so far."""
@@ -46,7 +49,9 @@ class LoopRoom:
             return 0.0
         for kid in moves.kids(stub):
             roads = {e[0] for e in ends(self.topo, kid) if e is not None and e[0] in self.roads}
-            if kid in self.features and any(moves.goes_round_loop(kid, loop, r) for r in roads):
+            # (through stubs, a loop joining a collector road: Columbus's r2 round r5)
+            if kid in self.features and (any(moves.goes_round_loop(kid, loop, r) for r in roads)
+                                         or moves.round_by_collector(kid, loop)):
                 r_kid = self.features[kid].radius_m
                 r_kid = r_kid if math.isfinite(r_kid) else self.st.fit.inf_reference_m
                 return r_kid + self.fitted.width[kid] + self.fitted.width[loop] / 2 + 1.0
@@ -62,7 +67,7 @@ class LoopRoom:
         (:meth:`flyover.geometry.rails.RoadWindows.road_rail`); its body may not reach
         back. For a stub whose child goes round a fitted loop (:meth:`connector_fences`),
         where the stub must not go."""
-        out = self.connector_fences(loop)
+        out = self.connector_fences(loop) + self.quadrant_fences(loop)
         for end, is_start in zip(ends(self.topo, loop), (True, False)):
             if end is None or end[0] not in self.roads:
                 continue
@@ -119,11 +124,112 @@ class LoopRoom:
                             *span, *lat))
         return out
 
+    def quadrant_fences(self, stub: str) -> list[tuple[float, ...]]:
+        """Where a stub fitted before a loop must not go so that its child, the loop's
+        outer connector by a collector road (:meth:`Movements.goes_round` with
+        ``collectors``: Columbus's ``r2`` from the stub ``r8`` into the stub ``r14``, round
+        the loop ``r5`` from I-70 East into the collector road ``r13``), can go round the
+        loop: on the stub's side of its road, from the crossing out to
+        :meth:`quadrant_reach`, at every height. Empty for any other ramp."""
+        reach = self.quadrant_reach(stub)
+        if reach is None:
+            return []
+        road, is_start, label, t_q, need = reach
+        r, st = self.roads[road], self.st
+        edge = r.lanes * st.lane_width_m
+        lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+        span = (t_q - need, t_q + 1e4) if is_start else (t_q - 1e4, t_q + need)
+        return [(r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading), *span,
+                 *lat)]
+
+    def quadrant_reach(self, stub: str) -> tuple | None:
+        """How far from the crossing (m, along its road) a stub's free end must lie for
+        its child to go round a loop by a collector road (:meth:`quadrant_fences`):
+        ``(road, is_start, label, crossing station, reach)``, the largest over such loops
+        not fitted yet, or ``None``. The loop is taken as a circle
+        ``LOOP_SPREAD`` times its radius (at least that of a loop as long as its climb,
+        :func:`flyover.geometry.profile.loop_radius`) in the quadrant's corner, beyond the
+        other road's half width and the room between connector and loop; the connector
+        turns round every point of it (:func:`round_need` at its radius)."""
+        from flyover.geometry.profile import loop_radius  # noqa: PLC0415
+        moves = self.moves
+        if not moves.is_stub(stub):
+            return None
+        start, end = ends(self.topo, stub)
+        fixed, is_start = (start, True) if start is not None else (end, False)
+        if fixed is None or fixed[0] not in self.roads:
+            return None
+        road, label = fixed
+        r, st = self.roads[road], self.st
+        d = np.array([math.cos(r.heading), math.sin(r.heading)])
+        best = None
+        for kid in moves.kids(stub):
+            for loop in self.topo.ramps:
+                if kid not in self.features or loop not in self.features \
+                        or loop in self.fitted.fits or not moves.round_by_collector(kid, loop):
+                    continue
+                a, b = moves.through_stubs(loop, False), moves.through_stubs(loop, True, True)
+                other = b if a == road else a if b == road else None
+                if other is None or other not in self.roads:
+                    continue
+                q = self.roads[other]
+                e = np.array([math.cos(q.heading), math.sin(q.heading)])
+                across = float(d[0] * e[1] - d[1] * e[0])
+                if abs(across) < 0.5:
+                    continue
+                rel = np.array(q.origin) - np.array(r.origin)
+                t_q = float(rel[0] * e[1] - rel[1] * e[0]) / across  # the crossing
+                fl, fc = self.features[loop], self.features[kid]
+                r_l = fl.radius_m if math.isfinite(fl.radius_m) else st.fit.inf_reference_m
+                r_l = LOOP_SPREAD * loop_radius(r_l, abs(q.z - r.z), fl.slope_pct,
+                                                st.fit.transition_m)
+                r_c = fc.radius_m if math.isfinite(fc.radius_m) else st.fit.inf_reference_m
+                c = moves.round_gap(kid, loop, st.ramp_lane_width_m)
+                th = np.linspace(0.0, 2.0 * math.pi, 73)
+                along = q.half_width / abs(across) + c + st.gap_m + r_l * (1.0 + np.cos(th))
+                out_m = 3.0 * c + r_l * (1.0 + np.sin(th))
+                need = float(np.max(along + round_need(out_m + c, r_c)))
+                if best is None or need > best[4]:
+                    best = (road, is_start, label, t_q, need)
+        return best
+
+    def near_crossing(self, cd: str, loop: str, feat: RampFeatures, lo: float, hi: float
+                      ) -> tuple[float, float]:
+        """The window ``lo..hi`` (stations) of a ``loop`` joining the collector road ``cd``
+        (a stub, :meth:`flyover.geometry.chains.Movements.collects`: Columbus's ``r5``
+        into ``r13``): where ``cd`` lies on the loop's side of the road the loop leaves,
+        from that expressway's half width and ``crossing_margin_m`` out to its radius
+        more (at least that of a loop as long as its climb), so that the loop turns in the
+        corner of its quadrant and its outer connector can go round it. Unchanged where
+        ``cd`` does not pass there."""
+        from flyover.geometry.profile import loop_radius  # noqa: PLC0415
+        start = ends(self.topo, loop)[0]
+        if start is None or start[0] not in self.roads or not any(
+                self.moves.round_by_collector(c, loop) for c in self.topo.ramps):
+            return lo, hi
+        q, st = self.roads[start[0]], self.st
+        stn = self.fitted.stations[cd]
+        left = np.array([-math.sin(q.heading), math.cos(q.heading)])
+        side = -1.0 if start[1].side == "right" else 1.0
+        out_m = side * ((stn["xy"] - np.array(q.origin)) @ left)
+        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
+        dz = abs(q.z - float(stn["z"][-1]))
+        r_l = loop_radius(rad, dz, feat.slope_pct, st.fit.transition_m)
+        near = q.half_width + st.crossing_margin_m
+        length = float(stn["s"][-1])
+        inside = (out_m >= near) & (out_m <= near + r_l) & (stn["s"] >= 0.05 * length) \
+            & (stn["s"] <= 0.95 * length)
+        if not inside.any():
+            return lo, hi
+        s = stn["s"][inside]
+        return (float(s.min()), float(s.max())) if s.max() - s.min() >= 1.0 else (lo, hi)
+
     def round_loops(self, ramp: str) -> frozenset[str]:
         """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
         joining the same two roads the other way round, on the road they share, or with
         its chain through stubs: :meth:`flyover.geometry.chains.Movements.is_outer_connector`)."""
-        return frozenset(o for o in self.fitted.fits if self.moves.is_outer_connector(ramp, o))
+        return frozenset(o for o in self.fitted.fits if self.moves.is_outer_connector(ramp, o)
+                         or self.moves.round_by_collector(ramp, o))
 
     def round_loop(self, loop: str, road: str, width: float, side: int,
                    feat: RampFeatures) -> float:

@@ -41,6 +41,12 @@ __all__ = ["climb_distance", "parting_distance", "loop_radius", "heights", "requ
            "elevation_polys", "evaluate_polys", "max_grade"]
 
 
+#: a height difference (m) below which a ramp's end does not climb: Columbus's r13 ended
+#: 5.3e-9 m under its plateau (the grade it leaves its parent at), and the climb down
+#: was two pieces 5e-9 m long with c = +-9.4e7 (a 2e6 pp grade read at its end)
+FLAT_M = 1e-6
+
+
 def climb_distance(height: np.ndarray, grade: float, transition: float) -> np.ndarray:
     """Horizontal distance to climb ``height`` at ``grade`` with vertical curves."""
     h = np.abs(np.asarray(height, float))
@@ -184,7 +190,7 @@ def required_grade(length: float, z0: float, zc: float, z1: float, grade: float,
 
 def _climb_polys(s0: float, z0: float, h: float, sign: float, grade: float,
                  transition: float) -> list[ElevationPoly]:
-    if h <= 0:
+    if h <= FLAT_M:  # none: its vertical curves would be nanometres long, c ~ 1e8
         return []
     t = min(transition, h / grade)
     d = h / grade + t

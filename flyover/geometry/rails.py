@@ -197,6 +197,9 @@ class RoadWindows:
         before = is_start != loop
         reach = max(st.reach_m, tz + st.gap_m)
         if moves.is_stub(ramp):  # a stub attaches just beyond the room it leaves
+            if (quad := self.loops.quadrant_reach(ramp)) is not None:
+                # and beyond the room a loop and its connector need in the quadrant
+                tz = max(tz, quad[4] + 1.5 * st.gap_m)
             reach = tz + st.stub_window_m
         elif bound is not None:  # no farther out than the ramp needs
             reach = max(tz + st.gap_m, min(reach, tz + bound))
@@ -341,6 +344,8 @@ class RampWindows:
             lo, hi = 0.15 * length, 0.6 * length
         else:
             lo, hi = self.reach_run(parent, ramp, label, 0.4 * length, 0.85 * length)
+            if feat is not None and self.moves.is_loop(ramp) and self.moves.collects(parent):
+                lo, hi = self.loops.near_crossing(parent, ramp, feat, lo, hi)
         lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
                              lo, hi)
         for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):

@@ -197,6 +197,10 @@ class LayoutState:
             if self.moves.is_stub(r):  # waits for that loop too
                 rounds[r] = sorted({k for c in self.moves.kids(r) if c in rounds
                                     for k in rounds[c] if not on[c] & on[k]})
+        for r in todo:  # a connector round a loop joining a collector road waits for it
+            if not self.moves.is_stub(r):  # (Columbus's r2 round r5); its stubs do not
+                rounds[r] += [k for k in todo if k not in rounds[r] and not on[r] & on[k]
+                              and self.moves.round_by_collector(r, k)]
         while todo:
             ready, waiting = [], []
             for r in todo:

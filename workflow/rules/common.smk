@@ -292,7 +292,11 @@ def class_tables(stage):
 #     without the fitted ramps that can move (those it meets; with none met, all), and
 #     those its new curve meets are fitted again round it, kept only if all then meet
 #     their targets (build._swapped: Columbus's r2 round the loop r5; stack4's lB2)
-GEOMETRY_VERSION = 44
+# 45: an outer connector round a loop that joins a collector road (Columbus's r2 round
+#     r5, Movements.round_by_collector) is fitted after the loop and round it; the loop
+#     joins the collector near the crossing (LoopRoom.near_crossing) and the stubs the
+#     connector leaves and joins end beyond the loop's reach (LoopRoom.quadrant_fences)
+GEOMETRY_VERSION = 45
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
