@@ -48,8 +48,9 @@ and the ramps already fitted:
 4. a ramp that misses its targets after all that is resampled (Algorithm 1)
    through ``resampler``; what still misses is recorded with the reason;
 5. an interchange in which a ramp still meets something at its level is
-   built again from scratch with other seeds (``rebuilds`` times at most),
-   and the build with the fewest conflicting ramps is kept.
+   built again from scratch with other seeds (``rebuilds`` times at most; then with the
+   same seeds without fitting a connector round a loop by a collector road first), and the
+   build with the fewest conflicting ramps is kept.
 
 Steps 1–3 of the first build are "the first try" as long as the targets are the sampled ones.
 """
@@ -279,7 +280,10 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
     While a ramp still meets something at its level, the interchange is built
     again with seeds derived from ``seed`` (``settings.rebuilds`` times at most);
     the build with the fewest conflicting ramps is returned, with first-try
-    success from the first build and the effort of all builds.
+    success from the first build and the effort of all builds. If every build still
+    meets something and an outer connector goes round a loop by a collector road
+    (:meth:`flyover.geometry.chains.Movements.round_by_collector`), it is built again
+    with the same seeds and that connector fitted before the loop, as any other.
 
     Raises
     ------
@@ -290,13 +294,19 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
     best = None
     effort: dict[str, tuple[int, float]] = {}
     first: dict[str, bool] = {}
-    for k in range(st.rebuilds + 1):
+    builds = [(seed if k == 0 else (seed * 2_654_435_761 + 97 * k) % (2**32), True)
+              for k in range(st.rebuilds + 1)]
+    for k, (ks, quadrant) in enumerate(builds):
         # a ramp meeting something at its level is never kept if it can be helped: the
         # whole interchange is built again with other seeds (every ramp's shape, hence
         # where the later ones find room, changes); the build with the fewest conflicts
-        # wins, its effort includes the discarded builds'
-        ks = seed if k == 0 else (seed * 2_654_435_761 + 97 * k) % (2**32)
-        ic = _build_once(topology, lanes, features, class_id, sample, ks, st, resampler)
+        # wins, its effort includes the discarded builds'; if every one still meets
+        # something, with the same seeds again and an outer connector round a loop by a
+        # collector road fitted before the loop (``quadrant`` off,
+        # :meth:`flyover.geometry.chains.Movements.round_by_collector`: on drawn Columbus
+        # set 17, r12 met r11 in every build with r2 round r5, not in every build without)
+        ic = _build_once(topology, lanes, features, class_id, sample, ks, st, resampler,
+                         quadrant)
         for o in ic.outcomes:
             e, t = effort.get(o.ramp, (0, 0.0))
             effort[o.ramp] = (e + o.evaluations, t + o.seconds)
@@ -314,10 +324,20 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             best = (rank, ic)
         if rank[0] == 0:
             break
+        if k == st.rebuilds and _has_collector_round(topology, lanes, features, st, seed):
+            builds += [(ks, False) for ks, _ in builds]
     ic = best[1]
     outs = tuple(replace(o, first_try_ok=first[o.ramp], evaluations=effort[o.ramp][0],
                          seconds=effort[o.ramp][1]) for o in ic.outcomes)
     return Interchange(ic.geometry, outs)
+
+
+def _has_collector_round(topology: Topology, lanes: Mapping[str, int],
+                         features: Mapping[str, RampFeatures], st: LayoutSettings,
+                         seed: int) -> bool:
+    """Whether an outer connector goes round a loop by a collector road here."""
+    moves = LayoutState(topology, lanes, features, st, seed).moves
+    return any(moves.round_by_collector(c, k) for c in topology.ramps for k in topology.ramps)
 
 
 def _kept_within(b: LayoutState, spec: RampSpec, seed: int, **within
@@ -351,9 +371,10 @@ class _Spent:
 
 def _build_once(topology: Topology, lanes: Mapping[str, int],
                 features: Mapping[str, RampFeatures], class_id: str, sample: int, seed: int,
-                st: LayoutSettings, resampler) -> Interchange:
-    """One build of :func:`build_interchange` with one seed."""
-    b = LayoutState(topology, lanes, features, st, seed)
+                st: LayoutSettings, resampler, quadrant: bool = True) -> Interchange:
+    """One build of :func:`build_interchange` with one seed (``quadrant``: as
+    :attr:`flyover.geometry.chains.Movements.quadrant`)."""
+    b = LayoutState(topology, lanes, features, st, seed, quadrant)
     outcomes = []
     radii = {r: f.radius_m for r, f in features.items()}  # the targets in force
     for k, ramp in enumerate(b.order()):

@@ -148,6 +148,9 @@ class Movements:
     def __init__(self, topo: Topology, roads: Mapping):
         self.topo, self.roads, self.g = topo, roads, topo.graph
         self.continuing = frozenset(r for c in continuations(topo) for r in c.ramps)
+        #: whether :meth:`round_by_collector` holds where it may (the build's last resort
+        #: turns it off: ``build.build_interchange``)
+        self.quadrant = True
 
     def ends(self, ramp: str):
         return ends(self.topo, ramp)
@@ -285,7 +288,8 @@ class Movements:
         connector leaves and joins beyond its reach
         (:meth:`flyover.geometry.loop_room.LoopRoom.quadrant_fences`) and fits the
         connector round it."""
-        return self.goes_round(ramp, loop, True) and not self.goes_round(ramp, loop)
+        return self.quadrant and self.goes_round(ramp, loop, True) \
+            and not self.goes_round(ramp, loop)
 
     def is_outer_connector(self, ramp: str, loop: str, collectors: bool = False) -> bool:
         """Whether ``ramp`` goes round the loop ``loop`` as its outer connector: on a road

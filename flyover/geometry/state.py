@@ -34,7 +34,8 @@ class LayoutState:
     """Roads, ramp kinds, level plan, fitted ramps, windows and specs of one build."""
 
     def __init__(self, topo: Topology, lanes: Mapping[str, int],
-                 features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int):
+                 features: Mapping[str, RampFeatures], st: LayoutSettings, seed: int,
+                 quadrant: bool = True):
         self.topo, self.st, self.seed = topo, st, seed
         self.features = dict(features)
         # a T's terminal is far enough out for its ramps to climb one level there: those
@@ -46,6 +47,7 @@ class LayoutState:
         self.roads = layout_roads(topo, lanes, st, slopes, climbing)
         self.g = topo.graph
         self.moves = Movements(topo, self.roads)
+        self.moves.quadrant = quadrant
         width = {r: self.moves.lanes(r) * st.ramp_lane_width_m for r in topo.ramps}
         self.fitted = FittedRamps(self.moves, width, st)
         self.levels = LevelPlan(self.moves, self.features, st)
