@@ -298,9 +298,8 @@ class Movements:
         (:meth:`flyover.geometry.loop_room.LoopRoom.round_loops`) and sampling
         (:func:`flyover.geometry.feasibility.round_loops`) share, but sampling also
         counts a loop joining a collector road (``collectors``, :meth:`collects`:
-        Columbus's ``r2`` round ``r5``), which the layout does not fit round it yet (fitted
-        so, ``r5`` joined ``r13`` too near ``r13``'s start for ``r2`` to go round it on half
-        the workflow's sets: ``docs/attic/issue41r2round.diff``)."""
+        Columbus's ``r2`` round ``r5``), which the layout fits round it with its own
+        rules (:meth:`round_by_collector`)."""
         if self.goes_round(ramp, loop, collectors):
             return True
         on = [{e[0] for e in ends(self.topo, r) if e is not None and e[0] in self.roads}
