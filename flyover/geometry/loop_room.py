@@ -21,7 +21,9 @@ import numpy as np
 
 from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fitted import FittedRamps
+from flyover.geometry.profile import loop_radius
 from flyover.geometry.settings import LayoutSettings, RampFeatures
+from flyover.geometry.straight import built_radius
 
 __all__ = ["LoopRoom", "round_need"]
 
@@ -52,8 +54,7 @@ class LoopRoom:
             # (through stubs, a loop joining a collector road: Columbus's r2 round r5)
             if kid in self.features and (any(moves.goes_round_loop(kid, loop, r) for r in roads)
                                          or moves.round_by_collector(kid, loop)):
-                r_kid = self.features[kid].radius_m
-                r_kid = r_kid if math.isfinite(r_kid) else self.st.fit.inf_reference_m
+                r_kid = built_radius(self.features[kid].radius_m, self.st.fit.inf_reference_m)
                 return r_kid + self.fitted.width[kid] + self.fitted.width[loop] / 2 + 1.0
         return 0.0
 
@@ -76,8 +77,7 @@ class LoopRoom:
             pos = self.g.edges[(road, loop) if is_start else (loop, road)].get("pos")
             if pos is None:
                 continue
-            edge = r.lanes * self.st.lane_width_m
-            lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+            lat = self._side_band(road, label)
             for p, t_min, t_max, other, _ in self.fitted.attached.get(road, []):
                 room = self.room_round(loop, other)
                 if room <= 0 or p == pos:
@@ -108,8 +108,7 @@ class LoopRoom:
         if pos is None:
             return []
         r, st = self.roads[road], self.st
-        edge = r.lanes * st.lane_width_m
-        lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+        lat = self._side_band(road, label)
         out = []
         for kid in moves.kids(stub):
             if kid not in self.features:
@@ -135,9 +134,7 @@ class LoopRoom:
         if reach is None:
             return []
         road, is_start, label, t_q, need = reach
-        r, st = self.roads[road], self.st
-        edge = r.lanes * st.lane_width_m
-        lat = (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+        r, lat = self.roads[road], self._side_band(road, label)
         span = (t_q - need, t_q + 1e4) if is_start else (t_q - 1e4, t_q + need)
         return [(r.origin[0], r.origin[1], math.cos(r.heading), math.sin(r.heading), *span,
                  *lat)]
@@ -151,7 +148,6 @@ class LoopRoom:
         :func:`flyover.geometry.profile.loop_radius`) in the quadrant's corner, beyond the
         other road's half width and the room between connector and loop; the connector
         turns round every point of it (:func:`round_need` at its radius)."""
-        from flyover.geometry.profile import loop_radius  # noqa: PLC0415
         moves = self.moves
         if not moves.is_stub(stub):
             return None
@@ -179,11 +175,8 @@ class LoopRoom:
                     continue
                 rel = np.array(q.origin) - np.array(r.origin)
                 t_q = float(rel[0] * e[1] - rel[1] * e[0]) / across  # the crossing
-                fl, fc = self.features[loop], self.features[kid]
-                r_l = fl.radius_m if math.isfinite(fl.radius_m) else st.fit.inf_reference_m
-                r_l = LOOP_SPREAD * loop_radius(r_l, abs(q.z - r.z), fl.slope_pct,
-                                                st.fit.transition_m)
-                r_c = fc.radius_m if math.isfinite(fc.radius_m) else st.fit.inf_reference_m
+                r_l = LOOP_SPREAD * self._loop_radius(self.features[loop], abs(q.z - r.z))
+                r_c = built_radius(self.features[kid].radius_m, st.fit.inf_reference_m)
                 c = moves.round_gap(kid, loop, st.ramp_lane_width_m)
                 th = np.linspace(0.0, 2.0 * math.pi, 73)
                 along = q.half_width / abs(across) + c + st.gap_m + r_l * (1.0 + np.cos(th))
@@ -202,7 +195,6 @@ class LoopRoom:
         more (at least that of a loop as long as its climb), so that the loop turns in the
         corner of its quadrant and its outer connector can go round it. Unchanged where
         ``cd`` does not pass there."""
-        from flyover.geometry.profile import loop_radius  # noqa: PLC0415
         start = ends(self.topo, loop)[0]
         if start is None or start[0] not in self.roads or not any(
                 self.moves.round_by_collector(c, loop) for c in self.topo.ramps):
@@ -212,9 +204,7 @@ class LoopRoom:
         left = np.array([-math.sin(q.heading), math.cos(q.heading)])
         side = -1.0 if start[1].side == "right" else 1.0
         out_m = side * ((stn["xy"] - np.array(q.origin)) @ left)
-        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
-        dz = abs(q.z - float(stn["z"][-1]))
-        r_l = loop_radius(rad, dz, feat.slope_pct, st.fit.transition_m)
+        r_l = self._loop_radius(feat, abs(q.z - float(stn["z"][-1])))
         near = q.half_width + st.crossing_margin_m
         length = float(stn["s"][-1])
         inside = (out_m >= near) & (out_m <= near + r_l) & (stn["s"] >= 0.05 * length) \
@@ -224,10 +214,24 @@ class LoopRoom:
         s = stn["s"][inside]
         return (float(s.min()), float(s.max())) if s.max() - s.min() >= 1.0 else (lo, hi)
 
+    def _side_band(self, road: str, label) -> tuple[float, float]:
+        """The lateral band (m, left positive) on ``label``'s side of ``road`` beyond its
+        lanes (a right label) or its line (a left one): where a fence on that side lies."""
+        edge = self.roads[road].lanes * self.st.lane_width_m
+        return (-1e4, -edge - 0.5) if label.side == "right" else (0.5, 1e4)
+
+    def _loop_radius(self, feat: RampFeatures, height: float) -> float:
+        """The radius a loop of ``feat`` takes up climbing ``height``
+        (:func:`flyover.geometry.profile.loop_radius`; ``inf``: ``inf_reference_m``)."""
+        st = self.st
+        return loop_radius(built_radius(feat.radius_m, st.fit.inf_reference_m), height,
+                           feat.slope_pct, st.fit.transition_m)
+
     def round_loops(self, ramp: str) -> frozenset[str]:
         """The fitted loops ``ramp`` goes round (a cloverleaf's outer connector: the loop
         joining the same two roads the other way round, on the road they share, or with
-        its chain through stubs: :meth:`flyover.geometry.chains.Movements.is_outer_connector`)."""
+        its chain through stubs: :meth:`flyover.geometry.chains.Movements.is_outer_connector`;
+        or through a collector road: :meth:`~flyover.geometry.chains.Movements.round_by_collector`)."""
         return frozenset(o for o in self.fitted.fits if self.moves.is_outer_connector(ramp, o)
                          or self.moves.round_by_collector(ramp, o))
 
@@ -248,7 +252,7 @@ class LoopRoom:
         rel = self.fitted.stations[loop]["centre"] - np.array(r.origin)
         t = rel @ d
         lat = np.clip(-(rel @ np.array([-d[1], d[0]])) - r.lanes * st.lane_width_m, 0.0, None)
-        rad = feat.radius_m if math.isfinite(feat.radius_m) else st.fit.inf_reference_m
+        rad = built_radius(feat.radius_m, st.fit.inf_reference_m)
         c = width + self.fitted.width[loop] / 2 + 1.0
         need = round_need(lat + c, rad)
         return float(np.max(t + need)) if side > 0 else float(np.min(t - need))
