@@ -1290,3 +1290,34 @@ def test_columbus_r2_goes_round_the_loop_r5_in_a_quadrant_laid_out_for_both(quad
         r8_end = np.asarray(ic.geometry.ramps[[r.id for r in ic.geometry.ramps].index(
             "r8")].plan[-1].p)[-1]
         assert r8_end[1] <= -need + 1.5 * LayoutSettings().gap_m + 2.0
+
+
+_SET_53 = ((3, 5, 4, 4), {
+    "r1": (210.0, 1.0), "r10": (30.0, 4.0), "r11": (210.0, 2.0), "r12": (math.inf, 5.0),
+    "r13": (100.0, 0.0), "r14": (60.0, 3.0), "r2": (60.0, 5.0), "r3": (40.0, 2.0),
+    "r4": (210.0, 3.0), "r5": (40.0, 3.0), "r6": (150.0, 1.0), "r7": (210.0, 4.0),
+    "r8": (280.0, 4.0), "r9": (60.0, 1.0)})
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not COLUMBUS.is_file(), reason=f"no real OSM extract at {COLUMBUS}")
+def test_an_outer_connector_over_its_loop_is_built_again_with_other_seeds():
+    """The workflow's Columbus set 53 (its sample seed): the first build, with no ramp at
+    another's level, takes r2 (60 m / 5 %) over the loop r5 (40 m / 3 %); that is a
+    bridge the design does not have, so the interchange is built again with other seeds,
+    as one with a same-level conflict, and the build kept has r2 round r5, every ramp
+    within its targets; first try stays the first build's."""
+    from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
+
+    topo, lanes, feats = _columbus_set(*_SET_53)
+    builds = {}
+    for rebuilds in (0, LayoutSettings().rebuilds):
+        ic = build_interchange(topo, lanes, feats, class_id="cd9e4c3eca6", sample=53,
+                               seed=3298058556, settings=LayoutSettings(rebuilds=rebuilds))
+        crossed = {frozenset((c.ramp, c.other)) for c in ramp_crossings(ic.geometry)}
+        builds[rebuilds] = (ic, frozenset(("r2", "r5")) in crossed)
+    (first, first_across), (kept, kept_across) = builds.values()
+    assert first_across and not kept_across
+    assert first.geometry.seed == 3298058556 and kept.geometry.seed != 3298058556
+    assert all(o.fit.ok and o.fit.conflicts == 0 for o in kept.outcomes)
+    assert [o.first_try_ok for o in kept.outcomes] == [o.first_try_ok for o in first.outcomes]

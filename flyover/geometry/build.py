@@ -47,10 +47,13 @@ and the ramps already fitted:
    the loop kept out at every height); all are kept only if all meet their targets;
 4. a ramp that misses its targets after all that is resampled (Algorithm 1)
    through ``resampler``; what still misses is recorded with the reason;
-5. an interchange in which a ramp still meets something at its level is
-   built again from scratch with other seeds (``rebuilds`` times at most; then with the
-   same seeds without fitting a connector round a loop by a collector road first), and the
-   build with the fewest conflicting ramps is kept.
+5. an interchange in which a ramp still meets something at its level, or an outer
+   connector goes over or under its loop (:func:`flyover.geometry.feasibility.round_loops`,
+   :func:`flyover.geometry.check.ramp_crossings`), is built again from scratch with other
+   seeds (``rebuilds`` times at most; if every build meets something, then with the same
+   seeds without fitting a connector round a loop by a collector road first), and the
+   build with the fewest conflicting ramps, then the fewest ramps missing their targets
+   or across their loop, is kept.
 
 Steps 1–3 of the first build are "the first try" as long as the targets are the sampled ones.
 """
@@ -69,7 +72,8 @@ from flyover.geometry.beside import (
     beside_run, child_room_fences, joins_straight_on, merge_window, run_slacks,
 )
 from flyover.geometry.collector import collector_fit
-from flyover.geometry.check import same_level_conflicts
+from flyover.geometry.check import ramp_crossings, same_level_conflicts
+from flyover.geometry.feasibility import round_loops
 from flyover.geometry.fit import (
     RampFit, RampSpec, bounds, conflicts_with, fit_ramp, ranked_starts, recount,
 )
@@ -277,10 +281,11 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         something at its level after that is resampled with its draws (the
         steepest slope), up to ``max_resamples`` times more.
 
-    While a ramp still meets something at its level, the interchange is built
-    again with seeds derived from ``seed`` (``settings.rebuilds`` times at most);
-    the build with the fewest conflicting ramps is returned, with first-try
-    success from the first build and the effort of all builds. If every build still
+    While a ramp still meets something at its level, or an outer connector goes over or
+    under its loop, the interchange is built again with seeds derived from ``seed``
+    (``settings.rebuilds`` times at most); the build with the fewest conflicting ramps,
+    then the fewest ramps missing their targets or across their loop, is returned, with
+    first-try success from the first build and the effort of all builds. If every build still
     meets something and an outer connector goes round a loop by a collector road
     (:meth:`flyover.geometry.chains.Movements.round_by_collector`), it is built again
     with the same seeds and that connector fitted before the loop, as any other.
@@ -291,6 +296,7 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
         When the topology cannot be laid out (naming the element).
     """
     st = settings or LayoutSettings()
+    pairs = {frozenset((p.connector, p.loop)) for p in round_loops(topology, st)}
     best = None
     effort: dict[str, tuple[int, float]] = {}
     first: dict[str, bool] = {}
@@ -299,8 +305,11 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
     for k, (ks, quadrant) in enumerate(builds):
         # a ramp meeting something at its level is never kept if it can be helped: the
         # whole interchange is built again with other seeds (every ramp's shape, hence
-        # where the later ones find room, changes); the build with the fewest conflicts
-        # wins, its effort includes the discarded builds'; if every one still meets
+        # where the later ones find room, changes); so is one whose outer connector goes
+        # over or under its loop (a bridge the design does not have, where the seeds put
+        # the loop in the connector's way); the build with the fewest conflicts wins, then
+        # the fewest ramps not as designed (missing targets, or a connector across its
+        # loop); its effort includes the discarded builds'; if every one still meets
         # something, with the same seeds again and an outer connector round a loop by a
         # collector road fitted before the loop (``quadrant`` off,
         # :meth:`flyover.geometry.chains.Movements.round_by_collector`: on drawn Columbus
@@ -311,20 +320,25 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             e, t = effort.get(o.ramp, (0, 0.0))
             effort[o.ramp] = (e + o.evaluations, t + o.seconds)
             first.setdefault(o.ramp, o.first_try_ok)
-        rank = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
-                sum(o.fit.conflicts for o in ic.outcomes), sum(not o.fit.ok for o in ic.outcomes))
-        if rank[0] == 0 and (dense := same_level_conflicts(ic.geometry)):
+        conflicting = (sum(o.fit.conflicts > 0 for o in ic.outcomes),
+                       sum(o.fit.conflicts for o in ic.outcomes))
+        if conflicting[0] == 0 and (dense := same_level_conflicts(ic.geometry)):
             # the fits' own count is on their samples; the dense check (lane centres every
             # metre, as validation's clearance check) can still find a ramp at a road's or
             # another ramp's level: that build is no better than one the fits saw meet
-            rank = (len({c.ramp for c in dense}), len(dense), rank[2])
+            conflicting = (len({c.ramp for c in dense}), len(dense))
+        across = len(pairs & {frozenset((c.ramp, c.other))
+                              for c in ramp_crossings(ic.geometry)}) if pairs else 0
+        rank = (*conflicting, sum(not o.fit.ok for o in ic.outcomes) + across)
         log.debug("%s sample %s build %d (seed %d): %d ramps meeting something at their "
-                  "level (%d samples), %d missing targets", class_id, sample, k, ks, *rank)
+                  "level (%d samples), %d missing targets or across their loop", class_id,
+                  sample, k, ks, *rank)
         if best is None or rank < best[0]:
             best = (rank, ic)
-        if rank[0] == 0:
+        if rank[0] == 0 and (not across or not quadrant):
             break
-        if k == st.rebuilds and _has_collector_round(topology, lanes, features, st, seed):
+        if k == st.rebuilds and best[0][0] > 0 \
+                and _has_collector_round(topology, lanes, features, st, seed):
             builds += [(ks, False) for ks, _ in builds]
     ic = best[1]
     outs = tuple(replace(o, first_try_ok=first[o.ramp], evaluations=effort[o.ramp][0],

@@ -47,6 +47,7 @@ class LayoutSettings:
     max_resamples: int = 3
     restarts: int = 5
     #: whole-interchange rebuilds with other DE seeds while a ramp still meets something
+    #: or an outer connector goes over or under its loop
     rebuilds: int = 3
     #: a ramp attaches to a road no farther beyond the room it keeps from the crossing
     #: than (1 + length_margin) × what it needs (:meth:`RampSpecs.need_m`: its turn at its

@@ -296,7 +296,10 @@ def class_tables(stage):
 #     r5, Movements.round_by_collector) is fitted after the loop and round it; the loop
 #     joins the collector near the crossing (LoopRoom.near_crossing) and the stubs the
 #     connector leaves and joins end beyond the loop's reach (LoopRoom.quadrant_fences)
-GEOMETRY_VERSION = 45
+# 46: an interchange whose outer connector goes over or under its loop is built again
+#     with other seeds, as one with a same-level conflict (build.build_interchange; the
+#     build with the fewest conflicts, then ramps missing targets or across their loop)
+GEOMETRY_VERSION = 46
 
 
 # -- throughput (step 6, workflow/rules/throughput.smk) ---------------------------------
