@@ -1236,7 +1236,7 @@ def test_only_columbus_r2_goes_round_a_loop_by_a_collector_road_and_its_stubs_ke
         b = LayoutState(t, {}, {r: RampFeatures(150.0, 4.0) for r in t.ramps},
                         LayoutSettings(), 0)
         pairs = [(c, k) for c in t.ramps for k in t.ramps if b.moves.round_by_collector(c, k)]
-        reach = {r: b.windows.loops.quadrant_reach(r) for r in t.ramps}
+        reach = {r: b.windows.loops.quadrant.reach(r) for r in t.ramps}
         found[name] = (pairs, sorted(r for r, q in reach.items() if q is not None))
     assert {n: v for n, v in found.items() if v != ([], [])} == {
         "09:0": ([("r2", "r5")], ["r14", "r8"])}
@@ -1246,7 +1246,7 @@ def test_only_columbus_r2_goes_round_a_loop_by_a_collector_road_and_its_stubs_ke
     def reach(**change):
         f = dict(feats, **{r: RampFeatures(*v) for r, v in change.items()})
         loops = LayoutState(topo, lanes, f, LayoutSettings(), 0).windows.loops
-        (_, _, _, t8, r8), (_, _, _, t14, r14) = (loops.quadrant_reach(r) for r in ("r8", "r14"))
+        (_, _, _, t8, r8), (_, _, _, t14, r14) = (loops.quadrant.reach(r) for r in ("r8", "r14"))
         assert abs(t8) < 5.0 and abs(t14) < 5.0  # from the crossing, on both roads
         return r8, r14
 
@@ -1284,7 +1284,7 @@ def test_columbus_r2_goes_round_the_loop_r5_in_a_quadrant_laid_out_for_both(quad
         # free ends are kept beyond the reach by fences, as long as they meet their
         # targets so); stations from the crossing, I-270 North northward, I-70 East eastward
         need = LayoutState(topo, lanes, feats, LayoutSettings(), 0).windows.loops \
-            .quadrant_reach("r8")[4] + 1.5 * LayoutSettings().gap_m
+            .quadrant.reach("r8")[4] + 1.5 * LayoutSettings().gap_m
         out = {o.ramp: o.fit.spec for o in ic.outcomes}
         assert out["r8"].start.hi <= -need + 5.0 and out["r14"].end.lo >= need - 5.0
         r8_end = np.asarray(ic.geometry.ramps[[r.id for r in ic.geometry.ramps].index(

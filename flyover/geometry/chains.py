@@ -284,9 +284,9 @@ class Movements:
         collector road counts as joining the road it collects for (:meth:`goes_round` with
         ``collectors``; Columbus's ``r2`` round ``r5``, which joins ``r13``): the layout
         then fits the loop first, in the corner of its quadrant
-        (:meth:`flyover.geometry.loop_room.LoopRoom.near_crossing`), keeps the stubs the
+        (:meth:`flyover.geometry.quadrant.CollectorQuadrant.window`), keeps the stubs the
         connector leaves and joins beyond its reach
-        (:meth:`flyover.geometry.loop_room.LoopRoom.quadrant_fences`) and fits the
+        (:meth:`flyover.geometry.quadrant.CollectorQuadrant.fences`) and fits the
         connector round it."""
         return self.quadrant and self.goes_round(ramp, loop, True) \
             and not self.goes_round(ramp, loop)

@@ -84,6 +84,7 @@ from flyover.geometry.chains import Movements, ends
 from flyover.geometry.fit import Rail
 from flyover.geometry.fitted import FittedRamps
 from flyover.geometry.loop_room import LoopRoom
+from flyover.geometry.quadrant import CollectorQuadrant
 from flyover.geometry.settings import LayoutSettings, RampFeatures
 from flyover.topology.model import Label
 
@@ -112,7 +113,8 @@ class AttachmentWindows:
         self.moves, self.fitted, self.st = moves, fitted, st
         self.roads, self.g, self.topo = moves.roads, moves.g, moves.topo
         self.features = dict(features or {})
-        self.loops = LoopRoom(moves, fitted, st, self.features)
+        self.loops = LoopRoom(moves, fitted, st, self.features,
+                              CollectorQuadrant(moves, fitted, st, self.features))
         self.on_roads = RoadWindows(moves, fitted, st, self.loops)
         self.on_ramps = RampWindows(moves, fitted, st, self.loops)
 
@@ -197,7 +199,7 @@ class RoadWindows:
         before = is_start != loop
         reach = max(st.reach_m, tz + st.gap_m)
         if moves.is_stub(ramp):  # a stub attaches just beyond the room it leaves
-            if (quad := self.loops.quadrant_reach(ramp)) is not None:
+            if (quad := self.loops.quadrant.reach(ramp)) is not None:
                 # and beyond the room a loop and its connector need in the quadrant
                 tz = max(tz, quad[4] + 1.5 * st.gap_m)
             reach = tz + st.stub_window_m
@@ -345,7 +347,7 @@ class RampWindows:
         else:
             lo, hi = self.reach_run(parent, ramp, label, 0.4 * length, 0.85 * length)
             if feat is not None and self.moves.is_loop(ramp) and self.moves.collects(parent):
-                lo, hi = self.loops.near_crossing(parent, ramp, feat, lo, hi)
+                lo, hi = self.loops.quadrant.window(parent, ramp, feat, lo, hi)
         lo, hi = room_beside(self.fitted, self.st.fit.clearance_m, parent, off, width,
                              lo, hi)
         for limit in ((LEVEL_GRADE,) if level else ()) + ((gentle,) if gentle else ()):
