@@ -615,7 +615,7 @@ def main() -> None:
     for line in failed:
         print(f"  {line}")
     print(f"interchanges kept from a rebuild with other seeds (a ramp met something at its "
-          f"level): {sum(rebuilt.values())} of {len(per_ic)} {rebuilt or ''}")
+          f"level, or an outer connector went over or under its loop): {sum(rebuilt.values())} of {len(per_ic)} {rebuilt or ''}")
     ramp_s = np.array([r["seconds"] for r in rows])  # all DE runs of the ramp
     print(f"\nper interchange (CPU s): median {np.median(per_ic):.3f}  p95 "
           f"{np.percentile(per_ic, 95):.3f}  (n={len(per_ic)})")
