@@ -126,3 +126,20 @@ def test_the_clearance_row_names_the_file_and_what_meets_what(tmp_path):
     assert not row.ok and row.detail.startswith(f"{path}: l meets l at s=1")
     write_geometry(_geometry(_loop("l", 6.0)), path)
     assert clearance_check(path).ok
+
+
+def test_ramp_crossings_of_chosen_pairs_are_those_of_every_pair():
+    """``pairs`` keeps the crossings of those pairs only, the same as among all."""
+    from flyover.geometry.check import ramp_crossings  # noqa: PLC0415
+    from flyover.geometry.layout import RampFeatures, build_interchange  # noqa: PLC0415
+    from flyover.topology.catalog import catalog_topologies  # noqa: PLC0415
+
+    topo = catalog_topologies()["cloverstack"]
+    ic = build_interchange(topo, {}, {r: RampFeatures(150.0, 3.0) for r in topo.ramps},
+                           seed=3)
+    every = ramp_crossings(ic.geometry)
+    assert every
+    pairs = {frozenset((c.ramp, c.other)) for c in every[::2]} | {frozenset(("oA1", "lB1"))}
+    assert ramp_crossings(ic.geometry, pairs=pairs) == tuple(
+        c for c in every if frozenset((c.ramp, c.other)) in pairs)
+    assert ramp_crossings(ic.geometry, pairs=set()) == ()

@@ -327,8 +327,8 @@ def build_interchange(topology: Topology, lanes: Mapping[str, int],
             # metre, as validation's clearance check) can still find a ramp at a road's or
             # another ramp's level: that build is no better than one the fits saw meet
             conflicting = (len({c.ramp for c in dense}), len(dense))
-        across = len(pairs & {frozenset((c.ramp, c.other))
-                              for c in ramp_crossings(ic.geometry)}) if pairs else 0
+        across = len({frozenset((c.ramp, c.other))
+                      for c in ramp_crossings(ic.geometry, pairs=pairs)}) if pairs else 0
         rank = (*conflicting, sum(not o.fit.ok for o in ic.outcomes) + across)
         log.debug("%s sample %s build %d (seed %d): %d ramps meeting something at their "
                   "level (%d samples), %d missing targets or across their loop", class_id,

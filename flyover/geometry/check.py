@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Collection
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -160,12 +161,14 @@ def same_level_conflicts(geometry: InterchangeGeometry, *, spacing_m: float = 1.
 
 
 def ramp_crossings(geometry: InterchangeGeometry, *, spacing_m: float = 2.0,
-                   end_zone_m: float = 15.0) -> tuple[Crossing, ...]:
+                   end_zone_m: float = 15.0,
+                   pairs: Collection[frozenset[str]] | None = None) -> tuple[Crossing, ...]:
     """Where two ramps cross in plan (their lane centres intersect, outside their end
     zones): each is a ramp bridge, and none is at one level when
     :func:`same_level_conflicts` finds nothing. Pairs attached to each other are
     skipped (they meet where one leaves or joins the other); each pair is reported
-    once, by the first ramp id.
+    once, by the first ramp id. ``pairs``: only these pairs of ramp ids (every pair if
+    ``None``).
 
     Example
     -------
@@ -174,7 +177,10 @@ def ramp_crossings(geometry: InterchangeGeometry, *, spacing_m: float = 2.0,
     ()
     """
     lanes = {}
+    wanted = None if pairs is None else set().union(*pairs)
     for r in geometry.ramps:
+        if wanted is not None and r.id not in wanted:
+            continue
         xy, z, s, length = _lane_centre(r, r.lanes * geometry.ramp_lane_width_m, spacing_m)
         inner = (s > end_zone_m) & (s < length - end_zone_m)
         lanes[r.id] = (xy[inner], z[inner], s[inner])
@@ -187,7 +193,8 @@ def ramp_crossings(geometry: InterchangeGeometry, *, spacing_m: float = 2.0,
     for a_i, a in enumerate(ids):
         pa, za, sa = lanes[a]
         for b in ids[a_i + 1:]:
-            if frozenset((a, b)) in attached:
+            if frozenset((a, b)) in attached or (pairs is not None
+                                                 and frozenset((a, b)) not in pairs):
                 continue
             pb, zb, sb = lanes[b]
             # segments that intersect have midpoints within half their lengths' sum
